@@ -1,0 +1,1 @@
+"""Gymnasium environments (installed as morphosim_gym.envs)."""

@@ -1,0 +1,36 @@
+"""MorphoSim Gym: a language-driven, editable 4D world simulator for robot learning.
+
+Text becomes a dynamic 3D Gaussian scene that can be edited by language and observed
+from any camera pose through a fast CPU splatting renderer, wrapped as Gymnasium
+environments. See the README for the tour.
+"""
+
+from .errors import BackendUnavailableError, CommandError, EditError
+from .render import RenderOutput, rasterize, render
+from .scene import (
+    Camera,
+    FeatureDecoder,
+    GeneratedClip,
+    Gaussians,
+    Motion,
+    Provenance,
+    Scene4D,
+    SceneFileError,
+    SceneObject,
+    export_ply,
+    load_clip,
+    load_scene,
+    read_ply,
+    save_clip,
+    save_scene,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BackendUnavailableError", "CommandError", "EditError",
+    "RenderOutput", "rasterize", "render",
+    "Camera", "FeatureDecoder", "GeneratedClip", "Gaussians", "Motion", "Provenance", "Scene4D",
+    "SceneFileError", "SceneObject", "export_ply", "load_clip", "load_scene", "read_ply", "save_clip",
+    "save_scene",
+]

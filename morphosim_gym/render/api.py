@@ -1,0 +1,238 @@
+"""Public rendering layer: shape and dtype contracts, then dispatch to a backend.
+
+`render` is the user-facing call (scenes or Gaussians, one or several cameras, numpy
+out); `rasterize` is the functional, differentiable call on torch tensors that
+reconstruction optimises through.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional, Sequence, Union
+
+import numpy as np
+
+from ..errors import BackendUnavailableError
+from ..scene.camera import Camera
+from ..scene.gaussians import Gaussians
+from ..scene.scene4d import Scene4D
+
+__all__ = ["RenderOutput", "render", "rasterize", "BACKENDS", "cameras_to_arrays"]
+
+BACKENDS = ("cpu", "torch", "gsplat")
+_OUTPUT_KEYS = ("rgb", "depth", "alpha", "instance", "features")
+
+
+@dataclass
+class RenderOutput:
+    """What one render returns. Arrays are numpy, or torch tensors when the inputs required gradients.
+
+    With a single camera: `rgb` [H, W, 3] float32 in [0, 1], `depth` [H, W] expected camera-z
+    depth of the visible Gaussians (0 where nothing is drawn), `alpha` [H, W], `instance` [H, W]
+    int32 object id (-1 background), `features` [H, W, D] when asked. With a list of cameras,
+    every array gains a leading [C] axis.
+    """
+
+    rgb: Any
+    depth: Any
+    alpha: Any
+    instance: Any
+    features: Any = None
+
+    def rgb_uint8(self) -> np.ndarray:
+        """`rgb` as uint8 (numpy), for images and videos."""
+        rgb = self.rgb.detach().cpu().numpy() if hasattr(self.rgb, "detach") else self.rgb
+        return (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+
+
+Source = Union[Scene4D, Gaussians, Sequence[Union[Scene4D, Gaussians]]]
+
+
+def render(
+    source: Source,
+    camera: Union[Camera, Sequence[Camera]],
+    t: float = 0.0,
+    *,
+    backend: str = "cpu",
+    background: Optional[Sequence[float]] = None,
+    features: bool = False,
+) -> RenderOutput:
+    """Render a scene at time `t` (or plain Gaussians) from one or several cameras in one pass.
+
+    Args:
+        source: a `Scene4D`, a `Gaussians`, or a list of them composited together (e.g. a scene
+            plus an agent's Gaussians). Gaussians holding torch tensors that require gradients
+            give differentiable torch outputs.
+        camera: a `Camera`, or a list of Cameras of one resolution (outputs gain a leading [C]).
+        t: seconds into the clip, for scenes (`ValueError` outside [0, duration]).
+        backend: "cpu" (compiled kernels, default), "torch" (reference) or "gsplat" (CUDA).
+        background: RGB in [0, 1]; default the first scene's background, else black.
+        features: also render the D-channel latent feature map.
+
+    Returns:
+        RenderOutput: rgb [H, W, 3], depth [H, W], alpha [H, W], instance [H, W] and, with
+        `features`, features [H, W, D] (each with a leading [C] for a list of cameras).
+
+    Examples:
+        >>> cam = Camera.look_at(eye=(0, -4, 2), target=(0, 0, 0.5), width=128, height=128)
+        >>> out = render(scene, cam, t=1.0)   # doctest: +SKIP
+        >>> out.rgb.shape, out.instance.dtype  # doctest: +SKIP
+        ((128, 128, 3), dtype('int32'))
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
+    parts = list(source) if isinstance(source, (list, tuple)) else [source]
+    if not parts:
+        raise ValueError("Expected a Scene4D or Gaussians to render, found an empty list")
+    gaussians = []
+    for p in parts:
+        if isinstance(p, Scene4D):
+            gaussians.append(p._at_shared(t))
+        elif isinstance(p, Gaussians):
+            gaussians.append(p)
+        else:
+            raise ValueError(f"Expected a Scene4D or Gaussians to render, found {type(p).__name__}")
+    if background is None:
+        scene_bg = next((p.background for p in parts if isinstance(p, Scene4D)), (0.0, 0.0, 0.0))
+        background = scene_bg
+    bg = np.asarray(background, dtype=np.float64)
+    if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
+        raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
+    g = Gaussians.concat(gaussians)
+    if features and g.feature_dim == 0:
+        raise ValueError("Expected Gaussians with features for features=True, found none "
+                         "(this scene has no distilled feature field)")
+    single = isinstance(camera, Camera)
+    cams = [camera] if single else list(camera)
+    viewmats, Ks, nears, width, height = cameras_to_arrays(cams)
+
+    if g.is_torch:
+        import torch
+
+        tensors = {k: getattr(g, k) for k in ("means", "quats", "scales", "opacities", "colors")}
+        dtype = tensors["means"].dtype
+        out = rasterize(**tensors, viewmats=torch.as_tensor(viewmats, dtype=dtype),
+                        Ks=torch.as_tensor(Ks, dtype=dtype), width=width, height=height,
+                        features=g.features if features else None, object_ids=g.object_ids,
+                        background=torch.as_tensor(bg, dtype=dtype), nears=torch.as_tensor(nears),
+                        backend=backend)
+    else:
+        out = _render_numpy(g, viewmats, Ks, nears, width, height, bg, features, backend)
+    if single:
+        out = {k: (None if v is None else v[0]) for k, v in out.items()}
+    return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
+
+
+def cameras_to_arrays(cams: Sequence[Camera]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """viewmats [C, 4, 4], Ks [C, 3, 3], nears [C], width, height of cameras of one resolution."""
+    if not cams:
+        raise ValueError("Expected at least one Camera, found none")
+    for c in cams:
+        if not isinstance(c, Camera):
+            raise ValueError(f"Expected Camera objects, found {type(c).__name__}")
+    width, height = cams[0].width, cams[0].height
+    for i, c in enumerate(cams):
+        if (c.width, c.height) != (width, height):
+            raise ValueError(f"Expected all cameras at {width}x{height}, found camera {i} at {c.width}x{c.height}")
+    viewmats = np.stack([c.world_to_camera for c in cams])
+    Ks = np.stack([c.K for c in cams])
+    nears = np.array([c.near for c in cams])
+    return viewmats, Ks, nears, width, height
+
+
+def _render_numpy(g: Gaussians, viewmats, Ks, nears, width, height, bg, features, backend) -> dict:
+    if backend == "cpu":
+        from .cpu import rasterize_numpy
+
+        return rasterize_numpy(g.means, g.quats, g.scales, g.opacities, g.colors, viewmats, Ks, width, height,
+                               features=g.features if features else None, object_ids=g.object_ids,
+                               background=bg, nears=nears)
+    import torch
+
+    def t32(x):
+        return None if x is None else torch.as_tensor(np.asarray(x, dtype=np.float32))
+
+    with torch.no_grad():
+        out = rasterize(t32(g.means), t32(g.quats), t32(g.scales), t32(g.opacities), t32(g.colors),
+                        t32(viewmats), t32(Ks), width, height,
+                        features=t32(g.features) if features else None,
+                        object_ids=None if g.object_ids is None else torch.as_tensor(g.object_ids),
+                        background=t32(bg), nears=torch.as_tensor(nears), backend=backend)
+    return {k: (None if v is None else v.cpu().numpy()) for k, v in out.items()}
+
+
+def rasterize(
+    means,        # [N, 3]
+    quats,        # [N, 4]
+    scales,       # [N, 3]
+    opacities,    # [N]
+    colors,       # [N, 3]
+    viewmats,     # [C, 4, 4]
+    Ks,           # [C, 3, 3]
+    width: int,
+    height: int,
+    features=None,    # [N, D]
+    object_ids=None,  # [N]
+    background=None,  # [3]
+    nears=None,       # [C]
+    backend: str = "cpu",
+) -> dict:
+    """Differentiable splatting of torch tensors (the functional core of `render`).
+
+    Args:
+        means: [N, 3]. quats: [N, 4] w, x, y, z (normalised inside). scales: [N, 3].
+        opacities: [N]. colors: [N, 3]. viewmats: [C, 4, 4] world->camera. Ks: [C, 3, 3].
+        width, height: pixels. features: [N, D] or None. object_ids: [N] or None.
+        background: [3] or None (black). nears: [C] or None (0.01). backend: "cpu", "torch", "gsplat".
+
+    Returns:
+        dict: rgb [C, H, W, 3], depth [C, H, W], alpha [C, H, W], instance [C, H, W] int32,
+        features [C, H, W, D] (None without features). Gradients flow to means, quats,
+        scales, opacities, colors and features.
+    """
+    import torch
+
+    n = means.shape[0]
+    shapes = {"means": (means, (n, 3)), "quats": (quats, (n, 4)), "scales": (scales, (n, 3)),
+              "opacities": (opacities, (n,)), "colors": (colors, (n, 3))}
+    for name, (x, shape) in shapes.items():
+        if tuple(x.shape) != shape:
+            raise ValueError(f"Expected {name} of shape {shape}, found {tuple(x.shape)}")
+    if features is not None and (features.ndim != 2 or features.shape[0] != n):
+        raise ValueError(f"Expected features of shape ({n}, D), found {tuple(features.shape)}")
+    if viewmats.ndim != 3 or viewmats.shape[1:] != (4, 4) or Ks.shape != (viewmats.shape[0], 3, 3):
+        raise ValueError(f"Expected viewmats [C, 4, 4] and Ks [C, 3, 3], found {tuple(viewmats.shape)} "
+                         f"and {tuple(Ks.shape)}")
+    if nears is None:
+        nears = torch.full((viewmats.shape[0],), 0.01, dtype=torch.float64)
+    if backend == "cpu":
+        from .cpu import rasterize_cpu
+
+        return rasterize_cpu(means, quats, scales, opacities, colors, viewmats, Ks, width, height,
+                             features=features, object_ids=object_ids, background=background, nears=nears)
+    if backend == "torch":
+        from .reference import rasterize_torch
+
+        out = rasterize_torch(means, quats, scales, opacities, colors, viewmats, Ks, width, height,
+                              features=features, object_ids=object_ids, background=background, nears=nears)
+        out.setdefault("features", None)
+        return out
+    if backend == "gsplat":
+        from .gsplat_backend import rasterize_gsplat
+
+        return rasterize_gsplat(means, quats, scales, opacities, colors, viewmats, Ks, width, height,
+                                features=features, object_ids=object_ids, background=background, nears=nears)
+    raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
+
+
+def backend_available(backend: str) -> bool:
+    """Whether a backend can run here (gsplat needs the package and a CUDA GPU)."""
+    if backend in ("cpu", "torch"):
+        return True
+    try:
+        from .gsplat_backend import check_gsplat
+
+        check_gsplat()
+        return True
+    except BackendUnavailableError:
+        return False

@@ -1,0 +1,14 @@
+"""World state: Gaussians, cameras, motion, 4D scenes, clips and their files."""
+
+from .camera import Camera
+from .clip import GeneratedClip
+from .features import FeatureDecoder
+from .gaussians import Gaussians
+from .io import SceneFileError, export_ply, load_clip, load_scene, read_ply, save_clip, save_scene
+from .motion import Motion
+from .scene4d import Provenance, Scene4D, SceneObject
+
+__all__ = [
+    "Camera", "GeneratedClip", "FeatureDecoder", "Gaussians", "Motion", "Provenance", "Scene4D", "SceneObject",
+    "SceneFileError", "save_scene", "load_scene", "save_clip", "load_clip", "export_ply", "read_ply",
+]

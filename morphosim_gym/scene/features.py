@@ -1,0 +1,86 @@
+"""`FeatureDecoder`: a small MLP from the latent feature field into one 2D encoder's space.
+
+The paper's decoders D^s are trained on rasterised 2D feature maps and applied
+directly to per-Gaussian 3D features at edit time. Weights are stored as numpy
+arrays so a scene needs no torch to be loaded, saved or queried.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["FeatureDecoder"]
+
+
+@dataclass(eq=False)
+class FeatureDecoder:
+    """MLP: `x -> W_L(... relu(W_1 x + b_1) ...) + b_L`.
+
+    Attributes:
+        name: the encoder space this decodes into (e.g. "semantic", "color").
+        weights: per layer, [in, out] matrices.
+        biases: per layer, [out] vectors.
+        normalize: L2-normalise the output (for cosine-similarity spaces).
+    """
+
+    name: str
+    weights: Sequence[np.ndarray]
+    biases: Sequence[np.ndarray]
+    normalize: bool = False
+
+    def __post_init__(self) -> None:
+        self.weights = [np.ascontiguousarray(w, dtype=np.float32) for w in self.weights]
+        self.biases = [np.ascontiguousarray(b, dtype=np.float32) for b in self.biases]
+        if not self.weights or len(self.weights) != len(self.biases):
+            raise ValueError(f"Expected as many biases as weights (>= 1), found {len(self.weights)} weights "
+                             f"and {len(self.biases)} biases")
+        prev = None
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            if w.ndim != 2 or b.shape != (w.shape[1],):
+                raise ValueError(f"Expected layer {i} weight [in, out] and bias [out], found {w.shape}, {b.shape}")
+            if prev is not None and w.shape[0] != prev:
+                raise ValueError(f"Expected layer {i} input width {prev}, found {w.shape[0]}")
+            if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
+                raise ValueError(f"Expected finite weights in layer {i}")
+            prev = w.shape[1]
+
+    @property
+    def in_dim(self) -> int:
+        """Latent width D."""
+        return int(self.weights[0].shape[0])
+
+    @property
+    def out_dim(self) -> int:
+        """Encoder width D_s."""
+        return int(self.weights[-1].shape[1])
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """Decode [..., D] latents to [..., D_s]."""
+        h = np.asarray(x, dtype=np.float32)
+        if h.shape[-1] != self.in_dim:
+            raise ValueError(f"Expected features with last dimension {self.in_dim}, found {h.shape}")
+        last = len(self.weights) - 1
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = h @ w + b
+            if i < last:
+                h = np.maximum(h, 0.0)
+        if self.normalize:
+            h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-12)
+        return h
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Flat dict of arrays for serialisation."""
+        out = {}
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            out[f"w{i}"] = w
+            out[f"b{i}"] = b
+        return out
+
+    @classmethod
+    def from_arrays(cls, name: str, arrays: dict[str, np.ndarray], normalize: bool) -> "FeatureDecoder":
+        """Inverse of `arrays`."""
+        n = len([k for k in arrays if k.startswith("w")])
+        return cls(name, [arrays[f"w{i}"] for i in range(n)], [arrays[f"b{i}"] for i in range(n)], normalize)

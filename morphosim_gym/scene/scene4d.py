@@ -1,0 +1,334 @@
+"""`Scene4D`: the editable 4D world state (canonical Gaussians + motion + objects + feature field)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from .camera import Camera
+from .features import FeatureDecoder
+from .gaussians import Gaussians
+from .motion import Motion
+
+__all__ = ["SceneObject", "Provenance", "Scene4D"]
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """An object of a scene.
+
+    Attributes:
+        id: the value this object's Gaussians carry in `object_ids` and renders in `instance`.
+        name: the noun as written in the prompt (e.g. "sedan").
+        category: the library category it was grounded to (e.g. "car").
+        color: RGB in [0, 1] the object was asked to have, if any.
+        dynamic: whether the object moves.
+        role: "object", "background" (ground, water, sky...) or "agent".
+    """
+
+    id: int
+    name: str
+    category: str
+    color: tuple[float, float, float] | None = None
+    dynamic: bool = False
+    role: str = "object"
+
+    def __post_init__(self) -> None:
+        if isinstance(self.id, bool) or not isinstance(self.id, (int, np.integer)) or self.id < 0:
+            raise ValueError(f"Expected a non-negative integer object id, found {self.id!r}")
+        object.__setattr__(self, "id", int(self.id))
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise ValueError(f"Expected a non-empty object name, found {self.name!r}")
+        if self.role not in ("object", "background", "agent"):
+            raise ValueError(f"Expected role 'object', 'background' or 'agent', found {self.role!r}")
+        if self.color is not None:
+            c = tuple(float(x) for x in self.color)
+            if len(c) != 3 or not all(0.0 <= x <= 1.0 for x in c):
+                raise ValueError(f"Expected color as 3 numbers in [0, 1], found {self.color!r}")
+            object.__setattr__(self, "color", c)
+
+    def to_dict(self) -> dict:
+        """JSON-friendly form."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a scene came from: the prompt and seed, which backends, and the edits applied since."""
+
+    prompt: str | None = None
+    seed: int | None = None
+    generator: str = "unknown"
+    reconstruction: str = "none"
+    edits: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        """JSON-friendly form."""
+        d = asdict(self)
+        d["edits"] = list(self.edits)
+        return d
+
+
+@dataclass(eq=False)
+class Scene4D:
+    """A dynamic scene of 3D Gaussians.
+
+    Attributes:
+        gaussians: canonical Gaussians (numpy), with `object_ids` and, when a feature field was
+            distilled, latent `features` [N, D].
+        motion: node poses over T frames and the skinning of the Gaussians to them.
+        objects: the scene's objects; `gaussians.object_ids` refer to their ids.
+        fps: frames per second of `motion`.
+        cameras: the generation camera, one per frame (or a single fixed one).
+        decoders: feature-field decoders by encoder name.
+        provenance: prompt, seed, backends and the edit history.
+        background: RGB in [0, 1] shown where no Gaussian covers a pixel.
+        parent: the scene this one was edited from (for `undo`), if any.
+
+    Examples:
+        >>> scene.at(1.0)            # world Gaussians 1 s into the clip  # doctest: +SKIP
+    """
+
+    gaussians: Gaussians
+    motion: Motion
+    objects: tuple[SceneObject, ...]
+    fps: float
+    cameras: tuple[Camera, ...]
+    decoders: Mapping[str, FeatureDecoder] = field(default_factory=dict)
+    provenance: Provenance = field(default_factory=Provenance)
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    parent: "Scene4D | None" = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.gaussians, Gaussians) or self.gaussians.is_torch:
+            raise ValueError("Expected gaussians as a numpy-backed Gaussians, found "
+                             f"{type(self.gaussians).__name__}")
+        if not isinstance(self.motion, Motion):
+            raise ValueError(f"Expected motion as a Motion, found {type(self.motion).__name__}")
+        n = len(self.gaussians)
+        if self.motion.num_gaussians != n:
+            raise ValueError(f"Expected motion skinning for {n} Gaussians, found {self.motion.num_gaussians}")
+        self.objects = tuple(self.objects)
+        ids = [o.id for o in self.objects]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"Expected unique object ids, found {ids}")
+        if self.gaussians.object_ids is None:
+            self.gaussians = self.gaussians.replace(object_ids=np.full(n, -1, dtype=np.int32))
+        present = np.unique(self.gaussians.object_ids)
+        unknown = sorted(set(present.tolist()) - set(ids) - {-1})
+        if unknown:
+            raise ValueError(f"Expected gaussians.object_ids to name objects {ids}, found unknown ids {unknown}")
+        fps = float(self.fps)
+        if not (math.isfinite(fps) and fps > 0):
+            raise ValueError(f"Expected fps > 0, found {self.fps}")
+        self.fps = fps
+        if isinstance(self.cameras, Camera):
+            self.cameras = (self.cameras,)
+        self.cameras = tuple(self.cameras)
+        if len(self.cameras) not in (1, self.motion.num_frames) or not all(isinstance(c, Camera) for c in self.cameras):
+            raise ValueError(f"Expected 1 or {self.motion.num_frames} Cameras, found {len(self.cameras)}")
+        self.decoders = dict(self.decoders)
+        for name, dec in self.decoders.items():
+            if not isinstance(dec, FeatureDecoder):
+                raise ValueError(f"Expected decoders[{name!r}] to be a FeatureDecoder, found {type(dec).__name__}")
+            if dec.in_dim != self.gaussians.feature_dim:
+                raise ValueError(f"Expected decoder {name!r} to take {self.gaussians.feature_dim}-d features, "
+                                 f"found input width {dec.in_dim}")
+        bg = tuple(float(x) for x in self.background)
+        if len(bg) != 3 or not all(0.0 <= x <= 1.0 for x in bg):
+            raise ValueError(f"Expected background as 3 numbers in [0, 1], found {self.background!r}")
+        self.background = bg
+        _freeze(self.gaussians)
+        for arr in self.motion.arrays().values():
+            arr.setflags(write=False)
+        self._cache_t: float | None = None
+        self._cache_g: Gaussians | None = None
+        self._hash: str | None = None
+
+    # -------------------------------------------------------------- time
+    @property
+    def num_frames(self) -> int:
+        """T, the number of frames the motion is defined on."""
+        return self.motion.num_frames
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first to the last frame, (T - 1) / fps."""
+        return (self.num_frames - 1) / self.fps
+
+    @property
+    def times(self) -> np.ndarray:
+        """[T] the time of each frame, seconds."""
+        return np.arange(self.num_frames) / self.fps
+
+    def frame_index(self, t: float) -> float:
+        """Fractional frame index of time `t`; `ValueError` outside [0, duration]."""
+        try:
+            tf = float(t)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"Expected t as a number of seconds, found {t!r}") from exc
+        if not math.isfinite(tf) or tf < -1e-9 or tf > self.duration + 1e-9:
+            raise ValueError(f"Expected t in [0, {self.duration:.4g}] s (the clip), found {t!r}")
+        return min(max(tf, 0.0), self.duration) * self.fps
+
+    def at(self, t: float = 0.0) -> Gaussians:
+        """World Gaussians at time `t` seconds, node poses interpolated between frames
+        (slerp for rotations). The result is a fresh array set owned by the caller."""
+        c = self._at_shared(t)
+        return Gaussians._trusted(means=c.means.copy(), quats=c.quats.copy(), scales=c.scales.copy(),
+                                  opacities=c.opacities.copy(), colors=c.colors.copy(),
+                                  features=None if c.features is None else c.features.copy(),
+                                  object_ids=c.object_ids.copy())
+
+    def _at_shared(self, t: float) -> Gaussians:
+        """Like `at`, but returns cached arrays that callers must not modify (the render hot path)."""
+        frame = self.frame_index(t)
+        if self._cache_t != frame or self._cache_g is None:
+            g = self.gaussians
+            means, quats = self.motion.apply(g.means, g.quats, frame)
+            means.setflags(write=False)
+            quats.setflags(write=False)
+            self._cache_g = Gaussians._trusted(means=means, quats=quats, scales=g.scales,
+                                               opacities=g.opacities, colors=g.colors,
+                                               features=g.features, object_ids=g.object_ids)
+            self._cache_t = frame
+        return self._cache_g
+
+    # ------------------------------------------------------------- cameras
+    @property
+    def camera(self) -> Camera:
+        """The generation camera (at t = 0)."""
+        return self.cameras[0]
+
+    def camera_at(self, t: float) -> Camera:
+        """The generation camera at time `t` (the nearest frame's; fixed cameras are constant)."""
+        if len(self.cameras) == 1:
+            self.frame_index(t)
+            return self.cameras[0]
+        return self.cameras[int(round(self.frame_index(t)))]
+
+    # ------------------------------------------------------------- objects
+    def object(self, key: int | str) -> SceneObject:
+        """The object with this id, or this name (or category); `ValueError` listing the objects otherwise."""
+        for o in self.objects:
+            if (isinstance(key, (int, np.integer)) and o.id == key) or (isinstance(key, str) and key in (o.name, o.category)):
+                return o
+        raise ValueError(f"Expected an object of the scene, found {key!r}; objects: {self.object_names}")
+
+    @property
+    def object_names(self) -> list[str]:
+        """Names of the objects, in order."""
+        return [o.name for o in self.objects]
+
+    @property
+    def id_to_name(self) -> dict[int, str]:
+        """Object id -> name."""
+        return {o.id: o.name for o in self.objects}
+
+    def object_center(self, key: int | str, t: float = 0.0) -> np.ndarray:
+        """[3] mean position of an object's Gaussians at time t."""
+        obj = self.object(key)
+        g = self._at_shared(t)
+        sel = g.object_ids == obj.id
+        if not np.any(sel):
+            raise ValueError(f"Expected Gaussians for object {obj.name!r}, found none")
+        return g.means[sel].mean(axis=0).astype(np.float64)
+
+    # ------------------------------------------------------------ editing
+    @property
+    def history(self) -> tuple[str, ...]:
+        """The edits applied since generation, in order."""
+        return self.provenance.edits
+
+    def derive(self, edit: str | None = None, **changes: Any) -> "Scene4D":
+        """A new scene with some fields replaced; `edit` is appended to the history and this scene
+        becomes the new one's parent (so `undo` returns it)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values.update(changes)
+        if edit is not None:
+            prov = values["provenance"]
+            values["provenance"] = Provenance(prov.prompt, prov.seed, prov.generator, prov.reconstruction,
+                                              prov.edits + (edit,))
+            values["parent"] = self
+        return Scene4D(**values)
+
+    def undo(self) -> "Scene4D":
+        """The scene before the last edit; `ValueError` if there is none."""
+        if self.parent is None:
+            raise ValueError("Expected an edited scene to undo, found a scene with no edit history")
+        return self.parent
+
+    # -------------------------------------------------------------- identity
+    def content_hash(self) -> str:
+        """SHA-256 (hex) of everything that defines the scene (not its parent)."""
+        if self._hash is None:
+            h = hashlib.sha256()
+            for name, arr in sorted(self.arrays().items()):
+                h.update(name.encode())
+                h.update(str(arr.dtype).encode() + str(arr.shape).encode())
+                h.update(np.ascontiguousarray(arr).tobytes())
+            h.update(json.dumps(self.metadata(), sort_keys=True).encode())
+            self._hash = h.hexdigest()
+        return self._hash
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """All arrays of the scene by a flat name (what `save_scene` writes)."""
+        g = self.gaussians
+        out: dict[str, np.ndarray] = {f"gaussians/{k}": getattr(g, k)
+                                      for k in ("means", "quats", "scales", "opacities", "colors", "object_ids")}
+        if g.features is not None:
+            out["gaussians/features"] = g.features
+        out.update({f"motion/{k}": v for k, v in self.motion.arrays().items()})
+        for name, dec in self.decoders.items():
+            out.update({f"decoders/{name}/{k}": v for k, v in dec.arrays().items()})
+        return out
+
+    def metadata(self) -> dict:
+        """All non-array fields, JSON-friendly."""
+        return {
+            "objects": [o.to_dict() for o in self.objects],
+            "fps": self.fps,
+            "cameras": [c.to_dict() for c in self.cameras],
+            "decoders": {name: {"normalize": d.normalize} for name, d in self.decoders.items()},
+            "provenance": self.provenance.to_dict(),
+            "background": list(self.background),
+        }
+
+    def __repr__(self) -> str:
+        return (f"Scene4D(gaussians={len(self.gaussians)}, frames={self.num_frames}, fps={self.fps:g}, "
+                f"objects={self.object_names}, edits={len(self.history)})")
+
+
+def _freeze(g: Gaussians) -> None:
+    for name in ("means", "quats", "scales", "opacities", "colors", "features", "object_ids"):
+        arr = getattr(g, name)
+        if isinstance(arr, np.ndarray):
+            arr.setflags(write=False)
+
+
+def objects_from_dicts(items: Iterable[Mapping[str, Any]]) -> tuple[SceneObject, ...]:
+    """SceneObjects from their `to_dict` forms."""
+    out = []
+    for d in items:
+        d = dict(d)
+        if d.get("color") is not None:
+            d["color"] = tuple(d["color"])
+        out.append(SceneObject(**d))
+    return tuple(out)
+
+
+def provenance_from_dict(d: Mapping[str, Any]) -> Provenance:
+    """Inverse of `Provenance.to_dict`."""
+    d = dict(d)
+    d["edits"] = tuple(d.get("edits", ()))
+    return Provenance(**d)
+
+
+def cameras_from_dicts(items: Sequence[Mapping[str, Any]]) -> tuple[Camera, ...]:
+    """Cameras from their `to_dict` forms."""
+    return tuple(Camera.from_dict(dict(c)) for c in items)

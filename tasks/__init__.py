@@ -1,0 +1,1 @@
+"""Task definitions and benchmark suites (installed as morphosim_gym.tasks)."""
