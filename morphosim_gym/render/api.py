@@ -150,13 +150,13 @@ def _render_numpy(g: Gaussians, viewmats, Ks, nears, width, height, bg, features
     import torch
 
     def t32(x):
-        return None if x is None else torch.as_tensor(np.asarray(x, dtype=np.float32))
+        return None if x is None else torch.from_numpy(np.array(x, dtype=np.float32))
 
     with torch.no_grad():
         out = rasterize(t32(g.means), t32(g.quats), t32(g.scales), t32(g.opacities), t32(g.colors),
                         t32(viewmats), t32(Ks), width, height,
                         features=t32(g.features) if features else None,
-                        object_ids=None if g.object_ids is None else torch.as_tensor(g.object_ids),
+                        object_ids=None if g.object_ids is None else torch.from_numpy(np.array(g.object_ids)),
                         background=t32(bg), nears=torch.as_tensor(nears), backend=backend)
     return {k: (None if v is None else v.cpu().numpy()) for k, v in out.items()}
 
