@@ -1,0 +1,372 @@
+"""Compose a generate `Plan` into a ground-truth `Scene4D`: setting, objects, camera, motion.
+
+Layout rules (documented so that users can predict a scene from its prompt):
+
+* the generation camera looks along world +y (image right = +x, image up = +z), pitched
+  down over ground-like settings, level under water and in the sky; its distance frames
+  the largest moving object at about a fifth of the image width, and every object;
+* moving objects are centred on the view (several movers take rows at different depths);
+  a landmark a mover goes to sits on the right if the mover starts on the left, and so
+  on; objects that only stand by line up behind the movers;
+* every object is one rigid node of the motion scaffold (static ones keep an identity
+  pose), so edits can later move anything; the setting is static;
+* canonical Gaussians are the scene at t = 0; node poses map them to each frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
+from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
+from .assets import CATEGORY_SPECS, build_parts
+from .parts import SurfaceCloud, parts_to_gaussians
+from .settings import Setting, build_setting
+from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
+
+__all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
+
+MAX_INSTANCES = 12
+
+
+@dataclass(frozen=True)
+class GenerationConfig:
+    """Clip and scene settings of the procedural generator.
+
+    Attributes:
+        num_frames: frames of the clip (49, as CogVideoX).
+        fps: frames per second (8, as CogVideoX).
+        width, height: frame size in pixels.
+        fov_y_deg: vertical field of view of the generation camera.
+        detail: multiplier on every Gaussian budget (1.0: ~2-3k per object, ~9k for the setting).
+        setting_budget: Gaussians of the setting at detail 1.
+        frame_fraction: width of the largest moving object as a fraction of the image width.
+    """
+
+    num_frames: int = 49
+    fps: float = 8.0
+    width: int = 128
+    height: int = 128
+    fov_y_deg: float = 50.0
+    detail: float = 1.0
+    setting_budget: int = 9000
+    frame_fraction: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.num_frames, int) and 1 <= self.num_frames <= 1000):
+            raise ValueError(f"Expected num_frames in [1, 1000], found {self.num_frames!r}")
+        if not (self.fps > 0 and math.isfinite(self.fps)):
+            raise ValueError(f"Expected fps > 0, found {self.fps!r}")
+        for k in ("width", "height"):
+            v = getattr(self, k)
+            if not (isinstance(v, int) and 16 <= v <= 4096):
+                raise ValueError(f"Expected {k} in [16, 4096], found {v!r}")
+        if not 0 < self.detail <= 16:
+            raise ValueError(f"Expected detail in (0, 16], found {self.detail!r}")
+        if not 0 < self.frame_fraction < 1:
+            raise ValueError(f"Expected frame_fraction in (0, 1), found {self.frame_fraction!r}")
+
+
+@dataclass
+class Instance:
+    """One object instance being composed."""
+
+    spec: Any                      # the plan's ObjectSpec
+    name: str
+    category: str
+    color: np.ndarray
+    asked_color: tuple | None
+    scale: float
+    cloud: SurfaceCloud | None = None
+    half: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    base_offset: float = 0.0       # world z of the object frame's origin above the anchor
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    trajectory: PlannedTrajectory | None = None
+    mobility: str = "ground"
+
+
+@dataclass
+class ComposedScene:
+    """What composition produced: the scene and the plan's trajectories (by object name)."""
+
+    scene: Scene4D
+    trajectories: dict[str, PlannedTrajectory]
+    setting: Setting
+    cameras: list[Camera]
+
+
+def _instances(plan: Any, config: GenerationConfig) -> list[Instance]:
+    out = []
+    total = sum(o.count for o in plan.objects)
+    if total > MAX_INSTANCES:
+        raise ValueError(f"Expected at most {MAX_INSTANCES} object instances in one scene, found {total}")
+    for spec in plan.objects:
+        cat = CATEGORY_SPECS.get(spec.category)
+        if cat is None:
+            raise ValueError(f"Expected a category of the generator's library, found {spec.category!r}; "
+                             f"known: {sorted(CATEGORY_SPECS)}")
+        rgb = np.asarray(spec.color.rgb if spec.color is not None else cat.color, dtype=np.float64)
+        for k in range(spec.count):
+            name = spec.name if spec.count == 1 else f"{spec.name} {k + 1}"
+            out.append(Instance(spec, name, spec.category, rgb, None if spec.color is None else tuple(spec.color.rgb),
+                                float(spec.scale), mobility=cat.mobility))
+    return out
+
+
+def _choose_setting(plan: Any, instances: Sequence[Instance]) -> str:
+    setting = plan.setting or "ground"
+    if setting == "water" and any(i.mobility == "swim" or i.category == "seaweed" for i in instances):
+        return "underwater"
+    return setting
+
+
+def _camera_path(plan: Any, base: Camera, centre: np.ndarray, config: GenerationConfig) -> list[Camera]:
+    spec = plan.camera
+    T = config.num_frames
+    if spec is None or spec.motion == "fixed" or T == 1:
+        return [base] * T
+    tau = np.linspace(0.0, 1.0, T)
+    speed = float(spec.speed)
+    if spec.motion == "orbit":
+        sign = -1.0 if spec.direction == "clockwise" else 1.0
+        total = sign * min(360.0, 120.0 * speed)
+        return [base.orbit(total * s, center=centre) for s in tau]
+    if spec.motion == "pan":
+        sign = -1.0 if spec.direction == "right" else 1.0     # turning right is a negative yaw about +z
+        total = sign * min(60.0, 25.0 * speed)
+        pos = base.position
+        return [base.orbit(total * s, center=pos) for s in tau]
+    # dolly: move along the view axis, in (default) or out
+    sign = -1.0 if spec.direction == "out" else 1.0
+    dist = float(np.linalg.norm(base.position - centre))
+    travel = sign * min(0.6, 0.3 * speed) * dist
+    out = []
+    for s in tau:
+        c2w = base.camera_to_world.copy()
+        c2w[:3, 3] += base.forward * travel * s
+        w2c = np.linalg.inv(c2w)
+        out.append(base.with_pose(w2c))
+    return out
+
+
+def _object_cloud(inst: Instance, rng: np.random.Generator, config: GenerationConfig) -> None:
+    cat = CATEGORY_SPECS[inst.category]
+    budget = max(200, int(cat.budget * config.detail))
+    cloud = parts_to_gaussians(build_parts(inst.category), budget, inst.color, rng)
+    cloud.means = cloud.means * inst.scale
+    cloud.scales = cloud.scales * inst.scale
+    lo, hi = cloud.means.min(0), cloud.means.max(0)
+    # centre in x, y; base on z = 0
+    shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -lo[2]])
+    cloud.means = cloud.means + shift
+    inst.half = (hi - lo) / 2
+    inst.cloud = cloud
+
+
+def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, prompt: str | None = None) -> ComposedScene:
+    """Build the ground-truth scene and trajectories of a generate plan.
+
+    Args:
+        plan: a generate-mode `morphosim_gym.language.Plan`.
+        seed: the random seed (same plan and seed: bit-identical scene).
+        config: clip settings.
+        prompt: the text, recorded in the scene's provenance.
+    """
+    config = config or GenerationConfig()
+    if getattr(plan, "mode", None) != "generate":
+        raise ValueError(f"Expected a generate plan, found mode {getattr(plan, 'mode', None)!r}")
+    instances = _instances(plan, config)
+    setting_name = _choose_setting(plan, instances)
+    for k, inst in enumerate(instances):
+        _object_cloud(inst, np.random.default_rng([seed, 1, k]), config)
+    motions = {m.target: m for m in plan.motions}
+    by_spec: dict[str, list[Instance]] = {}
+    for inst in instances:
+        by_spec.setdefault(inst.spec.name, []).append(inst)
+
+    def moves(inst: Instance) -> bool:
+        m = motions.get(inst.spec.name)
+        return m is not None and m.path != "stop"
+
+    movers = [i for i in instances if moves(i)]
+    standers = [i for i in instances if not moves(i)]
+    # ---- scale of the scene and the camera framing
+    key = movers or instances
+    size = max((float(max(i.half[0], i.half[1])) * 2 for i in key), default=1.0)
+    size = max(size, 0.05)
+    fx_over_w = 0.5 / math.tan(math.radians(config.fov_y_deg) / 2) * config.height / config.width
+    distance = size / config.frame_fraction * fx_over_w
+    all_size = max((float(max(i.half[0], i.half[1])) * 2 for i in instances), default=size)
+    distance = max(distance, all_size * 1.6 * fx_over_w / 0.8)
+    if setting_name in ("underwater", "sky"):
+        pitch = math.radians(4.0)
+    else:
+        pitch = math.radians(20.0)
+    water_level = 0.0
+    setting = build_setting(setting_name, radius=max(distance * 3.5, 6.0 * size),
+                            rng=np.random.default_rng([seed, 2]), budget=int(config.setting_budget * config.detail))
+    heights = {}
+    for inst in instances:
+        if inst.mobility == "air":
+            heights[inst.name] = max(setting.air_height, distance * 0.35) if setting_name != "sky" else 0.0
+        elif inst.mobility == "swim" and setting.swim_height is not None:
+            heights[inst.name] = setting.swim_height * max(1.0, size / 0.5) * 0.6 + inst.half[2]
+        elif inst.mobility == "float" and setting.water_level is not None:
+            heights[inst.name] = setting.water_level - 0.35 * inst.half[2] * 2
+        else:
+            heights[inst.name] = 0.0
+    lift = {i.name: (bounce_height(i.half) if motions.get(i.spec.name) is not None
+                     and motions[i.spec.name].path == "bounce" else 0.0) for i in instances}
+    focus_z = float(np.mean([heights[i.name] + i.half[2] + lift[i.name] / 2 for i in key])) if key else 0.5
+    tall = max((2 * float(i.half[2]) + lift[i.name] for i in key), default=size)
+    fy_over_h = 0.5 / math.tan(math.radians(config.fov_y_deg) / 2)
+    distance = max(distance, tall / 0.55 * fy_over_h)
+    eye = np.array([0.0, -distance * math.cos(pitch), focus_z + distance * math.sin(pitch)])
+    base_cam = Camera.look_at(eye, (0.0, 0.0, focus_z), config.width, config.height, config.fov_y_deg)
+    span = distance * config.width / (2 * base_cam.fx)        # half-width of the view at the centre, metres
+
+    # ---- placement
+    spacing = max(size * 1.3, 0.3 * span)
+    for r, inst in enumerate(movers):
+        row = [0.0, 0.9, -0.6, 1.6, 2.2][r % 5] * max(size, 0.2 * span) * 1.1
+        lateral = 0.0 if len(movers) == 1 else (r % 2) * 0.0
+        inst.position = np.array([lateral, row, heights[inst.name]])
+    landmark_names = {getattr(m, k) for m in plan.motions for k in ("end", "start", "around") if getattr(m, k)}
+    back = [i for i in standers if i.spec.name not in landmark_names]
+    for k, inst in enumerate(back):
+        n = len(back)
+        x = (k - (n - 1) / 2) * spacing * 1.1
+        y = (1.2 if movers else 0.0) * max(size, 0.2 * span) + (0.3 * spacing if n > 3 and k % 2 else 0.0)
+        inst.position = np.array([x, y, heights[inst.name]])
+    for inst in standers:
+        if inst.spec.name not in landmark_names:
+            continue
+        users = [m for m in plan.motions if inst.spec.name in (m.end, m.start, m.around)]
+        m = users[0]
+        mover = by_spec[m.target][0]
+        if m.around == inst.spec.name:
+            inst.position = mover.position.copy()
+            inst.position[2] = heights[inst.name]
+        else:
+            d = m.direction_world
+            side = 1.0 if d is None or d[0] >= 0 else -1.0
+            if m.start == inst.spec.name:
+                side = -side
+            inst.position = np.array([mover.position[0] + side * 0.55 * span, mover.position[1], heights[inst.name]])
+    # ---- receptacles: things that go "to" a plate / bowl / table end on top of it
+    top_of = {}
+    for inst in standers:
+        if inst.category in ("plate", "bowl", "table", "box", "book"):
+            top_of[inst.spec.name] = float(inst.position[2] + 2 * inst.half[2] * (0.35 if inst.category == "bowl" else 1.0))
+
+    # ---- motion planning
+    cameras = _camera_path(plan, base_cam, np.array([0.0, 0.0, focus_z]), config)
+    trajectories: dict[str, PlannedTrajectory] = {}
+    for inst in movers:
+        m = motions[inst.spec.name]
+        req = _request(m, inst, by_spec, top_of)
+        vertical = inst.mobility in ("air", "swim")
+        traj = plan_trajectory(req, cameras, config.num_frames, config.fps, inst.half, inst.position,
+                               vertical_plane=vertical, rolls=CATEGORY_SPECS[inst.category].rolls)
+        if req.path == "to" and req.end_height is not None:
+            traj.positions[:, 2] = _rise_onto(traj.positions, req.end_height, inst.position[2])
+        inst.trajectory = traj
+        trajectories[inst.name] = traj
+    # ---- assemble Gaussians, objects and the motion scaffold
+    scene = _assemble(plan, instances, setting, cameras, config, seed, prompt)
+    return ComposedScene(scene, trajectories, setting, cameras)
+
+
+def _rise_onto(positions: np.ndarray, top: float, rest: float) -> np.ndarray:
+    """Anchor heights climbing onto a receptacle over the last part of the approach."""
+    end = positions[-1, :2]
+    d = np.linalg.norm(positions[:, :2] - end, axis=1)
+    ramp = np.clip(1.0 - d / max(float(d.max()) * 0.25, 1e-6), 0.0, 1.0)
+    return rest + (top - rest) * ramp
+
+
+def _request(m: Any, inst: Instance, by_spec: dict, top_of: dict) -> MotionRequest:
+    def pos(name: str | None):
+        return None if name is None else tuple(by_spec[name][0].position)
+
+    direction = tuple(m.direction_world) if m.direction_world is not None else (1.0, 0.0, 0.0)
+    path = m.path
+    if m.end is not None and path in ("straight", "bounce", "zigzag", "oscillate"):
+        return MotionRequest("to", direction, m.speed, start=pos(m.start), end=pos(m.end),
+                             end_height=top_of.get(m.end))
+    if path == "circle":
+        return MotionRequest("circle", direction, m.speed, clockwise=m.clockwise is not False,
+                             center=pos(m.around) if m.around else None)
+    return MotionRequest(path, direction, m.speed, start=pos(m.start))
+
+
+def _yaw_quat(yaw: np.ndarray) -> np.ndarray:
+    return axis_angle_to_quat(np.array([0.0, 0.0, 1.0]), yaw)
+
+
+def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: list[Camera],
+              config: GenerationConfig, seed: int, prompt: str | None) -> Scene4D:
+    T = config.num_frames
+    objects = [SceneObject(0, setting.label, setting.name if setting.name != "underwater" else "water",
+                           role="background")]
+    parts = {k: [] for k in ("means", "quats", "scales", "opacities", "colors", "ids", "nodes")}
+
+    def add(cloud: SurfaceCloud, means: np.ndarray, quats: np.ndarray, obj_id: int, node: int) -> None:
+        parts["means"].append(means)
+        parts["quats"].append(quats)
+        parts["scales"].append(cloud.scales)
+        parts["opacities"].append(cloud.opacities)
+        parts["colors"].append(cloud.colors)
+        parts["ids"].append(np.full(len(means), obj_id))
+        parts["nodes"].append(np.full(len(means), node))
+
+    s = setting.cloud
+    add(s, s.means, s.quats, 0, -1)
+    rotations = np.zeros((T, len(instances), 4))
+    translations = np.zeros((T, len(instances), 3))
+    for k, inst in enumerate(instances):
+        obj_id = k + 1
+        objects.append(SceneObject(obj_id, inst.name, inst.category, color=inst.asked_color,
+                                   dynamic=inst.trajectory is not None))
+        traj = inst.trajectory
+        if traj is not None:
+            pos, yaw, spin = traj.positions, traj.headings, traj.spins
+        else:
+            pos = np.tile(inst.position, (T, 1))
+            right = cameras[0].camera_to_world[:3, 0]
+            yaw = np.full(T, math.atan2(right[1], right[0]) + (math.pi / 2 if inst.category in ("chair", "house") else 0.0))
+            spin = np.zeros(T)
+        q = _yaw_quat(yaw)
+        if np.any(spin):
+            roll = axis_angle_to_quat(np.array([0.0, 1.0, 0.0]), spin)     # rolling forward about local y
+            q = quat_multiply(q, roll)
+        centre = np.array([0.0, 0.0, inst.half[2]])                          # roll about the object's centre
+        mats = quat_to_matrix(q)
+        # world position of the object frame's origin: anchor minus (rotated centre offset) plus centre lift
+        if inst.mobility in ("air", "swim") and traj is not None:
+            origin = pos - np.array([0.0, 0.0, inst.half[2]])
+        else:
+            origin = pos
+        world_origin = origin + np.array([0.0, 0.0, inst.half[2]]) - np.einsum("tij,j->ti", mats, centre)
+        # canonical = frame 0 pose; node pose at t maps frame-0 world to frame-t world
+        r0 = mats[0]
+        c = inst.cloud
+        means0 = c.means @ r0.T + world_origin[0]
+        quats0 = quat_multiply(np.broadcast_to(q[0], (len(c), 4)), c.quats)
+        rel_mats = np.einsum("tij,kj->tik", mats, r0)                       # R_t R_0^T
+        rel_q = matrix_to_quat(rel_mats)
+        rotations[:, k] = rel_q
+        translations[:, k] = world_origin - np.einsum("tij,j->ti", rel_mats, world_origin[0])
+        add(c, means0, quats0, obj_id, k)
+    g = Gaussians(means=np.concatenate(parts["means"]), quats=np.concatenate(parts["quats"]),
+                  scales=np.concatenate(parts["scales"]), opacities=np.concatenate(parts["opacities"]),
+                  colors=np.concatenate(parts["colors"]), object_ids=np.concatenate(parts["ids"]))
+    motion = Motion.rigid(np.concatenate(parts["nodes"]), rotations, translations,
+                          node_objects=np.arange(1, len(instances) + 1))
+    text = prompt if prompt is not None else getattr(plan, "text", None)
+    return Scene4D(g, motion, objects, config.fps, cameras, provenance=Provenance(text, int(seed), "procedural", "none"),
+                   background=setting.background)

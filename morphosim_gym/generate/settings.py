@@ -1,0 +1,179 @@
+"""Settings (backgrounds): the ground, water, road, table top, snow, grass, sky... as Gaussians.
+
+Every setting is a static set of Gaussians around the origin plus a background colour
+for the pixels they leave uncovered. Objects rest on z = 0 (the ground, the road, the
+table top, the sea floor) except floating ones, which sit at `water_level`. Density
+falls off with distance from the centre so near ground is detailed and far ground stays
+cheap.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .parts import LIGHT_DIR, AMBIENT, DIFFUSE, SurfaceCloud, _normal_quats
+
+__all__ = ["Setting", "SETTING_NAMES", "build_setting"]
+
+SETTING_NAMES = ("ground", "grass", "road", "snow", "sand", "water", "underwater", "table", "indoor", "sky")
+
+
+@dataclass
+class Setting:
+    """A built background.
+
+    Attributes:
+        name: which setting.
+        cloud: its Gaussians in world coordinates (object-frame fields reused; `nodes` all 0).
+        background: RGB shown where no Gaussian is drawn.
+        water_level: z of the water surface (floating objects rest there), if any.
+        swim_height: z at which swimming objects move, if any.
+        air_height: z at which flying objects move.
+        label: object name of the background in the scene ("ground", "water", "road"...).
+    """
+
+    name: str
+    cloud: SurfaceCloud
+    background: tuple[float, float, float]
+    water_level: float | None = None
+    swim_height: float | None = None
+    air_height: float = 1.8
+    label: str = "ground"
+
+
+def _radial_patch(n: int, radius: float, rng: np.random.Generator, z: float = 0.0, power: float = 1.6,
+                  centre=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """Points on a disc, denser in the middle; returns (points, local spacing per point)."""
+    u = rng.random(n)
+    r = radius * u ** (power / 2.0)
+    phi = rng.uniform(0, 2 * math.pi, n)
+    # stratify the angle a bit so the centre has no gaps
+    pts = np.c_[centre[0] + r * np.cos(phi), centre[1] + r * np.sin(phi), np.full(n, z)]
+    # density ~ r^(2/power - 2): spacing from the expected number of points per unit area
+    area_density = n * (2.0 / power) * np.maximum(r / radius, 0.02) ** (2.0 / power - 2.0) / (math.pi * radius ** 2)
+    spacing = 1.0 / np.sqrt(area_density)
+    return pts, spacing
+
+
+def _flat(pts: np.ndarray, spacing: np.ndarray, colors: np.ndarray, rng: np.random.Generator,
+          normal=(0.0, 0.0, 1.0), opacity: float = 0.98, shade: bool = True, thickness: float = 0.3) -> SurfaceCloud:
+    n = len(pts)
+    nrm = np.tile(np.asarray(normal, dtype=np.float64), (n, 1))
+    if shade:
+        colors = colors * (AMBIENT + DIFFUSE * max(float(np.dot(normal, LIGHT_DIR)), 0.0))
+    tang = 0.75 * spacing
+    scales = np.c_[tang * rng.uniform(0.85, 1.15, n), tang * rng.uniform(0.85, 1.15, n), tang * thickness]
+    return SurfaceCloud(pts, _normal_quats(nrm, rng), scales, np.full(n, opacity), np.clip(colors, 0, 1),
+                        np.zeros(n, dtype=np.int64), ["setting"])
+
+
+def _noise(pts: np.ndarray, rng: np.random.Generator, scale: float, amount: float) -> np.ndarray:
+    ph = rng.uniform(0, 2 * math.pi, 4)
+    smooth = np.sin(scale * pts[:, 0] + ph[0]) * np.sin(scale * 1.37 * pts[:, 1] + ph[1])
+    smooth += 0.5 * np.sin(scale * 2.9 * pts[:, 0] + ph[2]) * np.sin(scale * 3.3 * pts[:, 1] + ph[3])
+    return 1.0 + amount * (0.6 * smooth / 1.5 + 0.4 * rng.uniform(-1, 1, len(pts)))
+
+
+def _merge(clouds: list[SurfaceCloud]) -> SurfaceCloud:
+    return SurfaceCloud(*(np.concatenate([getattr(c, k) for c in clouds]) for k in
+                          ("means", "quats", "scales", "opacities", "colors", "nodes")), node_names=["setting"])
+
+
+def _ground(rng, n, radius, base, noise_scale, noise_amount, patches=None) -> SurfaceCloud:
+    pts, spacing = _radial_patch(n, radius, rng)
+    col = np.tile(np.asarray(base, dtype=np.float64), (n, 1)) * _noise(pts, rng, noise_scale, noise_amount)[:, None]
+    if patches is not None:
+        w = (_noise(pts, rng, noise_scale * 0.3, 1.0) > 1.15)[:, None]
+        col = np.where(w, np.asarray(patches), col)
+    return _flat(pts, spacing, col, rng)
+
+
+def _backdrop(rng, n, distance, width, height, base, z0=0.0, noise=0.08, hills=True) -> SurfaceCloud:
+    """A far vertical band (hills, a wall) at y = distance facing the camera."""
+    u = rng.random((n, 2))
+    x = (u[:, 0] - 0.5) * width
+    top = height * (0.55 + 0.45 * np.sin(x / width * 7.0 + 1.0) * np.sin(x / width * 3.1)) if hills else np.full(n, height)
+    z = z0 + u[:, 1] * top
+    pts = np.c_[x, np.full(n, distance), z]
+    spacing = np.full(n, math.sqrt(width * height / n))
+    col = np.tile(np.asarray(base, dtype=np.float64), (n, 1)) * _noise(pts[:, [0, 2]], rng, 1.5, noise)[:, None]
+    return _flat(pts, spacing, col, rng, normal=(0.0, -1.0, 0.0), shade=False)
+
+
+def build_setting(name: str, radius: float, rng: np.random.Generator, budget: int = 9000) -> Setting:
+    """Build a setting covering a disc of `radius` metres around the origin."""
+    if name not in SETTING_NAMES:
+        raise ValueError(f"Expected a setting in {SETTING_NAMES}, found {name!r}")
+    sky = (0.62, 0.77, 0.93)
+    far = radius * 0.95
+    if name == "ground":
+        cloud = _ground(rng, budget, radius, (0.58, 0.55, 0.5), 2.0, 0.12)
+        return Setting(name, cloud, sky, label="ground")
+    if name == "grass":
+        g = _ground(rng, int(budget * 0.85), radius, (0.3, 0.55, 0.2), 2.5, 0.25, patches=(0.36, 0.5, 0.18))
+        hills = _backdrop(rng, int(budget * 0.15), far * 0.8, radius * 2.0, radius * 0.12, (0.25, 0.45, 0.22))
+        return Setting(name, _merge([g, hills]), sky, label="grass")
+    if name == "snow":
+        g = _ground(rng, int(budget * 0.85), radius, (0.93, 0.95, 0.98), 1.5, 0.06)
+        hills = _backdrop(rng, int(budget * 0.15), far * 0.8, radius * 2.0, radius * 0.2, (0.85, 0.88, 0.95))
+        return Setting(name, _merge([g, hills]), (0.7, 0.8, 0.92), label="snow")
+    if name == "sand":
+        g = _ground(rng, budget, radius, (0.86, 0.76, 0.55), 3.0, 0.12)
+        return Setting(name, g, (0.68, 0.82, 0.95), label="sand")
+    if name == "road":
+        n_road = int(budget * 0.45)
+        road_w = max(3.5, radius * 0.18)
+        u = rng.random((n_road, 2))
+        x = (u[:, 0] - 0.5) * 2 * radius
+        y = (u[:, 1] - 0.5) * road_w
+        pts = np.c_[x, y, np.full(n_road, 0.002)]
+        spacing = np.full(n_road, math.sqrt(2 * radius * road_w / n_road))
+        col = np.tile([0.22, 0.22, 0.23], (n_road, 1)) * _noise(pts, rng, 6.0, 0.15)[:, None]
+        dash = (np.abs(y) < road_w * 0.025) & ((x % 3.0) < 1.6)
+        edge = np.abs(np.abs(y) - road_w * 0.46) < road_w * 0.02
+        col[dash | edge] = [0.92, 0.92, 0.88]
+        road = _flat(pts, spacing, col, rng)
+        verge = _ground(rng, int(budget * 0.45), radius, (0.34, 0.52, 0.24), 2.0, 0.2)
+        verge = SurfaceCloud(*(getattr(verge, k)[np.abs(verge.means[:, 1]) > road_w / 2] for k in
+                               ("means", "quats", "scales", "opacities", "colors", "nodes")), node_names=["setting"])
+        hills = _backdrop(rng, int(budget * 0.1), far * 0.8, radius * 2.0, radius * 0.1, (0.3, 0.45, 0.28))
+        return Setting(name, _merge([road, verge, hills]), sky, label="road")
+    if name == "water":
+        pts, spacing = _radial_patch(budget, radius, rng)
+        waves = 0.5 + 0.5 * np.sin(pts[:, 0] * 3.0 + np.sin(pts[:, 1] * 1.7) * 2.0)
+        col = np.c_[0.12 + 0.1 * waves, 0.35 + 0.12 * waves, 0.55 + 0.12 * waves] * _noise(pts, rng, 4.0, 0.08)[:, None]
+        return Setting(name, _flat(pts, spacing, col, rng, opacity=0.96), sky, water_level=0.0, label="water")
+    if name == "underwater":
+        floor = _ground(rng, int(budget * 0.75), radius, (0.78, 0.72, 0.55), 3.0, 0.15)
+        floor.colors = np.clip(floor.colors * [0.75, 0.95, 1.0], 0, 1)       # water tint
+        n_p = int(budget * 0.25)
+        p = np.c_[rng.uniform(-radius * 0.5, radius * 0.5, n_p), rng.uniform(-radius * 0.3, radius * 0.7, n_p),
+                  rng.uniform(0.1, 3.0, n_p)]
+        particles = _flat(p, np.full(n_p, 0.02), np.tile([0.75, 0.9, 0.92], (n_p, 1)), rng, opacity=0.35, shade=False)
+        return Setting(name, _merge([floor, particles]), (0.12, 0.45, 0.55), swim_height=0.9, label="water")
+    if name == "table":
+        top = _ground(rng, int(budget * 0.8), radius * 0.6, (0.6, 0.42, 0.26), 1.0, 0.05)
+        grain = 0.88 + 0.12 * np.sin(top.means[:, 0] * 25.0 + np.sin(top.means[:, 1] * 3.0) * 2.0)
+        top.colors = np.clip(top.colors * grain[:, None], 0, 1)
+        wall = _backdrop(rng, int(budget * 0.2), radius * 0.55, radius * 2.0, radius * 0.6, (0.85, 0.82, 0.76),
+                         z0=-radius * 0.2, hills=False, noise=0.03)
+        return Setting(name, _merge([top, wall]), (0.8, 0.78, 0.74), label="table")
+    if name == "indoor":
+        floor = _ground(rng, int(budget * 0.75), radius * 0.7, (0.62, 0.45, 0.3), 1.0, 0.06)
+        planks = 0.85 + 0.15 * ((floor.means[:, 0] * 4.0) % 1.0 > 0.05)
+        floor.colors = np.clip(floor.colors * planks[:, None], 0, 1)
+        wall = _backdrop(rng, int(budget * 0.25), radius * 0.6, radius * 2.0, radius * 0.5, (0.9, 0.88, 0.82),
+                         hills=False, noise=0.03)
+        return Setting(name, _merge([floor, wall]), (0.85, 0.84, 0.8), label="floor")
+    # sky: only clouds far away; objects fly
+    n = budget
+    c = np.c_[rng.uniform(-radius, radius, n), rng.uniform(radius * 0.6, radius, n), rng.uniform(-radius * 0.1, radius * 0.4, n)]
+    clumps = rng.integers(0, 12, n)
+    centres = np.c_[rng.uniform(-radius, radius, 12), rng.uniform(radius * 0.6, radius, 12), rng.uniform(0, radius * 0.3, 12)]
+    c = centres[clumps] + rng.normal(size=(n, 3)) * [radius * 0.08, radius * 0.03, radius * 0.02]
+    clouds = _flat(c, np.full(n, radius * 0.03), np.tile([0.97, 0.97, 0.99], (n, 1)), rng, normal=(0.0, -1.0, 0.0),
+                   opacity=0.55, shade=False)
+    return Setting(name, clouds, (0.45, 0.65, 0.92), air_height=2.0, label="sky")
