@@ -269,13 +269,13 @@ def plan_trajectory(
                 # start across the frame from the landmark (left of it if it sits right of centre)
                 end_uv = cam0.project(end)[0]
                 sign = -1.0 if end_uv[0] >= W / 2 else 1.0
-                start = end + sign * side * _ground_span(cam0, end) * 0.45
+                start = end + sign * side * _ground_span(cam0, end) * 0.45 * scale_mult
             uv0, uv1 = cam0.project(start)[0], cam0.project(end)[0]
-            frac_arrive = min(1.0, 0.8 / max(scale * scale_mult, 1e-6))
+            frac_arrive = min(1.0, 0.8 / max(scale, 1e-6))
             n_move = max(1, int(round(frac_arrive * (T - 1))))
             tau = np.minimum(np.arange(T) / n_move, 1.0)
             ease = 1 - (1 - tau) ** 2                                     # ease out into the landmark
-            kp = uv0 + ease[:, None] * (uv1 - uv0) + shift
+            kp = uv0 + ease[:, None] * (uv1 - uv0)                       # the landmark does not move
             v = np.linalg.norm(np.diff(kp, axis=0), axis=1) * fps
             lam = np.full(max(T - 1, 0), scale)
             pos = _lift(cam0, kp, np.array([0, 0, 1.0]), anchor[2])
@@ -302,7 +302,7 @@ def plan_trajectory(
         span, room = bmax - bmin, hi - lo
         if np.all(bmin >= lo - 1e-6) and np.all(bmax <= hi + 1e-6):
             break
-        if np.any(span > room):
+        if np.any(span > room) or request.path == "to":
             mult *= 0.85 * float(np.min(np.where(span > room, room / np.maximum(span, 1e-9), 1.0)))
         else:
             shift = shift + np.where(bmin < lo, lo - bmin, 0.0) + np.where(bmax > hi, hi - bmax, 0.0)
