@@ -1,0 +1,230 @@
+"""The geometry and motion fit: optimise the 4D model against every frame of the clip."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from ..render import rasterize
+from ..scene import GeneratedClip
+from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_loss, photometric_loss, psnr_torch,
+                     smooth_motion_loss, track_loss)
+from .model import DynamicGaussians, rbf_skinning
+from .strategy import Strategy, accumulate, initialize_state, refine
+
+__all__ = ["FitConfig", "fit", "ClipTensors"]
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """Optimisation settings (learning rates scale with the scene depth where marked).
+
+    Attributes:
+        iterations: optimisation steps (one frame each).
+        lr_means: position learning rate, times the median scene depth.
+        lr_scales, lr_quats, lr_opacity, lr_colors: per-Gaussian learning rates.
+        lr_node_trans: node translation learning rate, times the median scene depth.
+        lr_node_quats: node rotation learning rate.
+        w_ssim, w_depth, w_mask, w_empty, w_track, w_arap, w_smooth: loss weights.
+        strategy: densification and pruning.
+        backend: renderer ("cpu").
+        progress: show a tqdm bar.
+    """
+
+    iterations: int = 1200
+    lr_means: float = 2e-4
+    lr_scales: float = 5e-3
+    lr_quats: float = 1e-3
+    lr_opacity: float = 3e-2
+    lr_colors: float = 2.5e-2
+    lr_node_trans: float = 1e-3
+    lr_node_quats: float = 1e-3
+    w_ssim: float = 0.2
+    w_depth: float = 0.1
+    w_mask: float = 0.2
+    w_empty: float = 0.2
+    w_track: float = 0.05
+    w_arap: float = 1.0
+    w_smooth: float = 1.0
+    strategy: Strategy = field(default_factory=Strategy)
+    backend: str = "cpu"
+    progress: bool = True
+
+
+class ClipTensors:
+    """A clip's frames and priors as torch tensors, plus per-frame camera arrays."""
+
+    def __init__(self, clip: GeneratedClip, instance_ids: list[int]) -> None:
+        self.T = clip.num_frames
+        self.H, self.W = clip.height, clip.width
+        self.rgb = torch.from_numpy(clip.frames.astype(np.float32) / 255.0)
+        self.depth = torch.from_numpy(clip.depth.astype(np.float32))
+        self.masks = torch.from_numpy(clip.masks.astype(np.int64))
+        self.instance_ids = list(instance_ids)
+        self.viewmats = torch.from_numpy(np.stack([c.world_to_camera for c in clip.cameras]).astype(np.float32))
+        self.Ks = torch.from_numpy(np.stack([c.K for c in clip.cameras]).astype(np.float32))
+        self.nears = torch.tensor([c.near for c in clip.cameras], dtype=torch.float64)
+        self.fx = float(clip.cameras[0].fx)
+
+    def onehot(self, frame: int) -> torch.Tensor:
+        """[H, W, K] one-hot instance masks (background pixels are all zero)."""
+        m = self.masks[frame]
+        out = torch.zeros(self.H, self.W, len(self.instance_ids))
+        for k, inst in enumerate(self.instance_ids):
+            out[..., k] = (m == inst).float()
+        return out
+
+
+def _node_pairs(model: DynamicGaussians, k: int = 3) -> torch.Tensor:
+    """Neighbouring node pairs (k nearest of the same instance) for ARAP."""
+    c = model.node_centres
+    objs = model.node_objects
+    pairs = []
+    for i in range(len(c)):
+        same = torch.nonzero((objs == objs[i]) & (torch.arange(len(c)) != i)).squeeze(1)
+        if len(same) == 0:
+            continue
+        d = (c[same] - c[i]).norm(dim=-1)
+        for j in same[torch.argsort(d)[:k]]:
+            pairs.append((i, int(j)))
+    return torch.tensor(pairs, dtype=torch.long).reshape(-1, 2)
+
+
+def _track_targets(clip: GeneratedClip, model: DynamicGaussians, reference: dict[int, int], dynamic: dict[int, bool]):
+    """Canonical 3D points of dynamic-instance tracks (lifted at their reference frame), their
+    skinning, 2D targets [P, T, 2] and visibility [P, T]; None without tracks."""
+    if clip.tracks is None or model.node_centres.shape[0] == 0:
+        return None
+    pts, nodes_inst, keep = [], [], []
+    for p in range(len(clip.tracks)):
+        vis = np.flatnonzero(clip.track_visible[p])
+        if len(vis) < 2:
+            continue
+        uv = clip.tracks[p, vis[0]]
+        c = int(np.clip(np.floor(uv[0]), 0, clip.width - 1))
+        r = int(np.clip(np.floor(uv[1]), 0, clip.height - 1))
+        inst = int(clip.masks[vis[0], r, c])
+        if inst < 0 or not dynamic.get(inst, False):
+            continue
+        ref = reference[inst]
+        if not clip.track_visible[p, ref]:
+            continue
+        uvr = clip.tracks[p, ref]
+        c = int(np.clip(np.floor(uvr[0]), 0, clip.width - 1))
+        r = int(np.clip(np.floor(uvr[1]), 0, clip.height - 1))
+        z = float(clip.depth[ref, r, c])
+        if z <= 0 or clip.masks[ref, r, c] != inst:
+            continue
+        # canonical = world at the reference frame, where the node poses are identity-initialised
+        world = clip.cameras[ref].unproject(uvr[None], np.array([z]))[0]
+        pts.append(world)
+        nodes_inst.append(inst)
+        keep.append(p)
+    if not pts:
+        return None
+    pts = np.asarray(pts)
+    nodes, weights = rbf_skinning(pts, np.asarray(nodes_inst), model.node_centres.numpy().astype(np.float64),
+                                  model.node_objects.numpy(), model.slots)
+    # canonical frame of each instance is its reference frame's world: undo the (initial) pose there
+    return (torch.as_tensor(pts, dtype=torch.float32), torch.as_tensor(nodes, dtype=torch.long),
+            torch.as_tensor(weights), torch.as_tensor(clip.tracks[keep]), torch.as_tensor(clip.track_visible[keep]))
+
+
+def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int], dynamic: dict[int, bool],
+        config: FitConfig | None = None, seed: int = 0, background: tuple[float, float, float] = (0, 0, 0)) -> dict:
+    """Optimise `model` in place against the clip. Returns a log (losses, PSNR, timings)."""
+    cfg = config or FitConfig()
+    torch.manual_seed(seed)
+    gen = torch.Generator().manual_seed(seed)
+    order_rng = np.random.default_rng(seed)
+    data = ClipTensors(clip, sorted(int(i) for i in np.unique(clip.masks) if i >= 0))
+    scene_depth = float(np.median(clip.depth[clip.depth > 0]))
+    bg = torch.tensor(background, dtype=torch.float32)
+    # footprint of each Gaussian (initial pixel size), for densification thresholds
+    footprint = model.scales().detach().max(dim=-1).values.clone()
+    inst_index = {inst: k for k, inst in enumerate(data.instance_ids)}
+
+    def onehot_features() -> torch.Tensor:
+        idx = torch.tensor([inst_index.get(int(i), -1) for i in model.object_ids.tolist()])
+        oh = torch.zeros(model.num, len(data.instance_ids))
+        ok = idx >= 0
+        oh[ok, idx[ok]] = 1.0
+        return oh
+
+    def make_optimizer() -> torch.optim.Optimizer:
+        groups = [
+            {"params": [model.means], "lr": cfg.lr_means * scene_depth, "name": "means"},
+            {"params": [model.quats], "lr": cfg.lr_quats, "name": "quats"},
+            {"params": [model.log_scales], "lr": cfg.lr_scales, "name": "log_scales"},
+            {"params": [model.opacity_logits], "lr": cfg.lr_opacity, "name": "opacity_logits"},
+            {"params": [model.color_logits], "lr": cfg.lr_colors, "name": "color_logits"},
+        ]
+        if model.node_trans.shape[1]:
+            groups += [{"params": [model.node_trans], "lr": cfg.lr_node_trans * scene_depth, "name": "node_trans"},
+                       {"params": [model.node_quats], "lr": cfg.lr_node_quats, "name": "node_quats"}]
+        return torch.optim.Adam(groups, eps=1e-15)
+
+    optimizer = make_optimizer()
+    state = initialize_state(model)
+    state["footprint"] = footprint
+    tracks = _track_targets(clip, model, reference, dynamic)
+    pairs = _node_pairs(model)
+    node_c0 = model.node_centres.clone()
+    onehot = onehot_features()
+    log = {"loss": [], "psnr": [], "refine": []}
+    start = time.perf_counter()
+    frames = []
+    bar = tqdm(range(cfg.iterations), desc="reconstruct", disable=not cfg.progress, leave=False)
+    for it in bar:
+        if not frames:
+            frames = list(order_rng.permutation(data.T))
+        t = int(frames.pop())
+        means, quats = model.warp(t)
+        out = rasterize(means, quats, model.scales(), model.opacities(), model.colors(), data.viewmats[t:t + 1],
+                        data.Ks[t:t + 1], data.W, data.H, features=onehot, background=bg,
+                        nears=data.nears[t:t + 1], backend=cfg.backend)
+        rgb, depth, alpha, soft = out["rgb"][0], out["depth"][0], out["alpha"][0], out["features"][0]
+        target = data.rgb[t]
+        loss = photometric_loss(rgb, target, cfg.w_ssim)
+        loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha)
+        loss = loss + cfg.w_mask * mask_loss(soft, data.onehot(t))
+        loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
+        if model.node_trans.shape[1]:
+            if tracks is not None:
+                pts, tn, tw, tuv, tvis = tracks
+                world = model.points_at(pts, tn, tw, t)
+                cam = data.viewmats[t]
+                pc = world @ cam[:3, :3].T + cam[:3, 3]
+                K = data.Ks[t]
+                uv = torch.stack([K[0, 0] * pc[:, 0] / pc[:, 2] + K[0, 2], K[1, 1] * pc[:, 1] / pc[:, 2] + K[1, 2]], -1)
+                loss = loss + cfg.w_track * track_loss(uv, tuv[:, t], tvis[:, t], float(data.W))
+            node_pos = model.points_at(node_c0, torch.arange(len(node_c0))[:, None],
+                                       torch.ones(len(node_c0), 1), t)
+            loss = loss + cfg.w_arap * arap_loss(node_pos, node_c0, pairs) / max(scene_depth ** 2, 1e-9)
+            if 0 < t < data.T - 1:
+                loss = loss + cfg.w_smooth * smooth_motion_loss(model.node_quats, model.node_trans / scene_depth,
+                                                                torch.tensor([t]))
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        accumulate(state, model, state["footprint"])
+        optimizer.step()
+        with torch.no_grad():
+            model.quats.data /= model.quats.data.norm(dim=-1, keepdim=True)
+        s = cfg.strategy
+        if s.refine_start <= it < s.refine_stop and (it - s.refine_start) % s.refine_every == s.refine_every - 1:
+            counts = refine(model, optimizer, state, s, state["footprint"], gen)
+            log["refine"].append({"iteration": it, **counts, "gaussians": model.num})
+            onehot = onehot_features()
+        if it % 25 == 0 or it == cfg.iterations - 1:
+            p = psnr_torch(rgb.detach().clamp(0, 1), target)
+            log["loss"].append(float(loss))
+            log["psnr"].append(p)
+            bar.set_postfix(loss=f"{float(loss):.4f}", psnr=f"{p:.2f}", n=model.num)
+    log["seconds"] = time.perf_counter() - start
+    log["iterations"] = cfg.iterations
+    return log
+

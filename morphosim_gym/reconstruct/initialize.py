@@ -1,0 +1,161 @@
+"""Initialise the 4D model from a clip: static background and dynamic instances, scaffold nodes.
+
+* every instance of the masks is lifted with the depth prior; an instance whose lifted
+  tracks move rigidly by more than `motion_threshold` (fraction of the scene depth) is
+  dynamic, the others are static;
+* static instances are fused from several frames into one point set (a voxel per pixel
+  footprint), dynamic ones are brought back to their reference frame (where their mask
+  is largest) with the per-frame rigid poses estimated from tracks (Kabsch, robust);
+* each dynamic instance gets a scaffold of nodes (k-means over its canonical points),
+  all starting with the instance's rigid motion; Gaussians are flat discs facing the
+  camera they were seen from, one per pixel footprint, with the pixel's colour.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..scene import GeneratedClip
+from .lifting import PointSet, backproject, instance_motion, voxel_downsample
+from .model import DynamicGaussians
+
+__all__ = ["InitConfig", "InitResult", "initialize"]
+
+
+@dataclass(frozen=True)
+class InitConfig:
+    """Initialisation settings.
+
+    Attributes:
+        frame_stride: lift every n-th frame (plus each dynamic instance's reference frame).
+        motion_threshold: an instance is dynamic if it moves more than this fraction of the
+            median scene depth over the clip.
+        points_per_node: scaffold density (one node per this many canonical points).
+        max_nodes: at most this many nodes per dynamic instance.
+        slots: nodes each Gaussian is skinned to.
+        opacity: initial opacity.
+        flatness: normal-axis scale as a fraction of the footprint.
+    """
+
+    frame_stride: int = 6
+    motion_threshold: float = 0.01
+    points_per_node: int = 600
+    max_nodes: int = 6
+    slots: int = 4
+    opacity: float = 0.9
+    flatness: float = 0.25
+
+
+@dataclass
+class InitResult:
+    """The initial model and what initialisation learnt about the clip."""
+
+    model: DynamicGaussians
+    dynamic: dict[int, bool]
+    reference: dict[int, int]
+    instance_poses: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+
+def _kmeans(points: np.ndarray, k: int, rng: np.random.Generator, iters: int = 20) -> np.ndarray:
+    if k <= 1 or len(points) <= k:
+        return points.mean(axis=0, keepdims=True) if k <= 1 else points[:k].copy()
+    centres = points[rng.choice(len(points), size=k, replace=False)]
+    for _ in range(iters):
+        d = ((points[:, None] - centres[None]) ** 2).sum(-1)
+        lab = d.argmin(1)
+        for j in range(k):
+            sel = lab == j
+            if sel.any():
+                centres[j] = points[sel].mean(0)
+    return centres
+
+
+def _disc_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    from ..generate.parts import _normal_quats
+
+    return _normal_quats(normals, rng)
+
+
+def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int = 0) -> InitResult:
+    """Build the initial `DynamicGaussians` of a clip (never reads `clip.ground_truth`)."""
+    cfg = config or InitConfig()
+    if clip.depth is None or clip.masks is None:
+        missing = [n for n in ("depth", "masks") if getattr(clip, n) is None]
+        raise ValueError(f"Expected a clip with depth and instance-mask priors for reconstruction, missing {missing}")
+    rng = np.random.default_rng(seed)
+    T = clip.num_frames
+    ids = sorted(int(i) for i in np.unique(clip.masks) if i >= 0)
+    valid_depth = clip.depth[clip.depth > 0]
+    if valid_depth.size == 0:
+        raise ValueError("Expected some pixels with a positive depth prior, found none")
+    scene_depth = float(np.median(valid_depth))
+    frames = sorted(set(range(0, T, max(1, cfg.frame_stride))) | {T - 1})
+
+    dynamic, reference, poses = {}, {}, {}
+    for inst in ids:
+        area = (clip.masks == inst).reshape(T, -1).sum(1)
+        ref = int(np.argmax(area))
+        rots, trans, good = instance_motion(clip, inst, ref)
+        # how far a point at the instance's reference centroid travels
+        sel = clip.masks[ref] == inst
+        pts = backproject(clip, ref, select=sel)
+        centre = pts.points.mean(0) if len(pts) else np.zeros(3)
+        travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
+        dynamic[inst] = bool(travel > cfg.motion_threshold * scene_depth and good.sum() >= 2)
+        reference[inst] = ref
+        poses[inst] = (rots, trans)
+
+    static_sets, dyn_sets = [], {}
+    for t in frames:
+        ps = backproject(clip, t)
+        static = np.isin(ps.ids, [i for i in ids if not dynamic[i]])
+        static_sets.append(ps.subset(static))
+    for inst in ids:
+        if not dynamic[inst]:
+            continue
+        rots, trans = poses[inst]
+        parts = []
+        for t in sorted(set(frames) | {reference[inst]}):
+            ps = backproject(clip, t)
+            ps = ps.subset(ps.ids == inst)
+            if not len(ps):
+                continue
+            # frame t world -> reference frame (canonical): x_ref = R^T (x - t)
+            ps.points = (ps.points - trans[t]) @ rots[t]
+            ps.normals = ps.normals @ rots[t]
+            parts.append(ps)
+        dyn_sets[inst] = PointSet.concat(parts)
+
+    static = PointSet.concat(static_sets)
+    if len(static):
+        static = voxel_downsample(static, float(np.median(static.footprint)) * 1.0)
+    all_sets = [static]
+    node_centres, node_objects, node_rot, node_trans = [], [], [], []
+    for inst, ps in dyn_sets.items():
+        if not len(ps):
+            continue
+        ps = voxel_downsample(ps, float(np.median(ps.footprint)) * 1.0)
+        all_sets.append(ps)
+        k = int(np.clip(round(len(ps) / cfg.points_per_node), 1, cfg.max_nodes))
+        centres = _kmeans(ps.points.copy(), k, rng)
+        rots, trans = poses[inst]
+        for c in centres:
+            node_centres.append(c)
+            node_objects.append(inst)
+            node_rot.append(rots)
+            node_trans.append(trans)
+    pts = PointSet.concat(all_sets)
+    if len(pts) == 0:
+        raise ValueError("Expected pixels to lift into Gaussians, found none (empty masks or depth)")
+    fp = np.maximum(pts.footprint, 1e-5)
+    scales = np.c_[fp, fp, fp * cfg.flatness] * 0.9
+    quats = _disc_quats(pts.normals, rng)
+    K = len(node_centres)
+    rot_arr = np.stack(node_rot, axis=1) if K else np.zeros((T, 0, 3, 3))
+    trans_arr = np.stack(node_trans, axis=1) if K else np.zeros((T, 0, 3))
+    model = DynamicGaussians(pts.points, quats, scales, np.full(len(pts), cfg.opacity), np.clip(pts.colors, 0.0, 1.0),
+                             pts.ids, np.asarray(node_centres).reshape(-1, 3), np.asarray(node_objects, dtype=int),
+                             rot_arr, trans_arr, slots=cfg.slots)
+    return InitResult(model, dynamic, reference, poses)

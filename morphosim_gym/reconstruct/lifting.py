@@ -1,0 +1,202 @@
+"""Lift a monocular clip's depth prior to 3D points, and estimate rigid motion from tracks.
+
+Only the clip's frames, cameras and priors are read (never `clip.ground_truth`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ..scene import Camera, GeneratedClip
+
+__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "voxel_downsample", "interior_mask",
+           "estimate_background_color"]
+
+
+@dataclass
+class PointSet:
+    """Coloured world points with the instance id they came from and a footprint (metres per pixel)."""
+
+    points: np.ndarray      # [n, 3]
+    colors: np.ndarray      # [n, 3] in [0, 1]
+    ids: np.ndarray         # [n] int
+    footprint: np.ndarray   # [n] pixel size at the point's depth, metres
+    normals: np.ndarray     # [n, 3] estimated from the depth map, facing the camera
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def subset(self, sel: np.ndarray) -> "PointSet":
+        return PointSet(self.points[sel], self.colors[sel], self.ids[sel], self.footprint[sel], self.normals[sel])
+
+    @staticmethod
+    def concat(sets: list["PointSet"]) -> "PointSet":
+        sets = [s for s in sets if len(s)]
+        if not sets:
+            return PointSet(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int), np.zeros(0), np.zeros((0, 3)))
+        return PointSet(*(np.concatenate([getattr(s, k) for s in sets]) for k in
+                          ("points", "colors", "ids", "footprint", "normals")))
+
+
+def interior_mask(masks: np.ndarray, depth: np.ndarray, erode: int = 1) -> np.ndarray:
+    """[H, W] pixels that are safely inside one instance (eroded) and have a depth."""
+    valid = depth > 0
+    if erode <= 0:
+        return valid
+    ids = masks.astype(np.int32)
+    # a pixel is interior if all its neighbours within `erode` share its id
+    same = np.ones_like(valid)
+    for dy in range(-erode, erode + 1):
+        for dx in range(-erode, erode + 1):
+            if dx == 0 and dy == 0:
+                continue
+            shifted = np.roll(np.roll(ids, dy, axis=0), dx, axis=1)
+            same &= shifted == ids
+    # also reject depth discontinuities (mixed foreground/background pixels)
+    d = depth.astype(np.float32)
+    grad = np.maximum(np.abs(cv2.Sobel(d, cv2.CV_32F, 1, 0, ksize=3)), np.abs(cv2.Sobel(d, cv2.CV_32F, 0, 1, ksize=3)))
+    smooth = grad <= 0.5 * np.maximum(d, 1e-6)
+    return valid & same & smooth
+
+
+def _normals(camera: Camera, pts_img: np.ndarray) -> np.ndarray:
+    """Per-pixel normals [H, W, 3] (world) from a grid of world points, oriented towards the camera."""
+    dx = np.zeros_like(pts_img)
+    dy = np.zeros_like(pts_img)
+    dx[:, 1:-1] = pts_img[:, 2:] - pts_img[:, :-2]
+    dy[1:-1] = pts_img[2:] - pts_img[:-2]
+    n = np.cross(dx, dy)
+    norm = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = np.where(norm > 1e-12, n / np.maximum(norm, 1e-12), 0.0)
+    to_cam = camera.position - pts_img
+    flip = np.sum(n * to_cam, axis=-1, keepdims=True) < 0
+    n = np.where(flip, -n, n)
+    fallback = to_cam / np.maximum(np.linalg.norm(to_cam, axis=-1, keepdims=True), 1e-12)
+    return np.where(norm > 1e-12, n, fallback)
+
+
+def backproject(clip: GeneratedClip, frame: int, select: np.ndarray | None = None, stride: int = 1) -> PointSet:
+    """World points of a frame's pixels (every `stride`-th), from the depth prior.
+
+    `select` [H, W] bool limits the pixels (default: interior pixels with a depth)."""
+    if clip.depth is None:
+        raise ValueError("Expected a clip with a depth prior for reconstruction, found none")
+    cam = clip.cameras[frame]
+    depth = clip.depth[frame]
+    masks = clip.masks[frame] if clip.masks is not None else np.zeros(depth.shape, np.int32)
+    H, W = depth.shape
+    jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    world = cam.unproject(np.stack([jj, ii], -1), depth)
+    normals = _normals(cam, world)
+    sel = interior_mask(masks, depth) if select is None else (select & (depth > 0))
+    if stride > 1:
+        grid = np.zeros_like(sel)
+        grid[::stride, ::stride] = True
+        sel = sel & grid
+    rows, cols = np.nonzero(sel)
+    rgb = clip.frames[frame, rows, cols].astype(np.float64) / 255.0
+    z = depth[rows, cols].astype(np.float64)
+    return PointSet(world[rows, cols], rgb, masks[rows, cols].astype(int), z / cam.fx * stride, normals[rows, cols])
+
+
+def voxel_downsample(ps: PointSet, voxel: float) -> PointSet:
+    """Keep one point per voxel of this size (the first seen), per instance id."""
+    if len(ps) == 0:
+        return ps
+    keys = np.floor(ps.points / voxel).astype(np.int64)
+    keys = np.c_[keys, ps.ids]
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return ps.subset(np.sort(first))
+
+
+def kabsch(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rigid (R, t) minimising sum w ||R src + t - dst||^2 (no scaling; proper rotation)."""
+    w = np.ones(len(src)) if weights is None else np.asarray(weights, dtype=np.float64)
+    w = w / w.sum()
+    cs, cd = w @ src, w @ dst
+    a = (src - cs) * w[:, None]
+    cov = a.T @ (dst - cd)
+    u, _, vt = np.linalg.svd(cov)
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    rot = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return rot, cd - rot @ cs
+
+
+def _lift_tracks(clip: GeneratedClip, frame: int, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World points of track positions in a frame via the depth prior, and which ones had a depth."""
+    H, W = clip.height, clip.width
+    c = np.clip(np.floor(uv[:, 0]).astype(int), 0, W - 1)
+    r = np.clip(np.floor(uv[:, 1]).astype(int), 0, H - 1)
+    z = clip.depth[frame, r, c].astype(np.float64)
+    return clip.cameras[frame].unproject(uv, z), z > 0
+
+
+def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
+                    robust_iters: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-frame rigid poses of one instance relative to a reference frame, from its 2D tracks
+    lifted by depth: rotations [T, 3, 3] and translations [T, 3] mapping reference-frame world
+    points to each frame, plus a [T] bool of frames estimated from enough tracks (the others
+    are interpolated or held)."""
+    T = clip.num_frames
+    rots = np.tile(np.eye(3), (T, 1, 1))
+    trans = np.zeros((T, 3))
+    good = np.zeros(T, bool)
+    good[reference] = True
+    if clip.tracks is None:
+        return rots, trans, good
+    tr = clip.tracks
+    vis = clip.track_visible
+    # the tracks that belong to this instance: those landing on its mask where visible
+    own = np.zeros(len(tr), bool)
+    for p in range(len(tr)):
+        frames = np.flatnonzero(vis[p])
+        if len(frames) == 0:
+            continue
+        uv = tr[p, frames]
+        c = np.clip(np.floor(uv[:, 0]).astype(int), 0, clip.width - 1)
+        r = np.clip(np.floor(uv[:, 1]).astype(int), 0, clip.height - 1)
+        hits = clip.masks[frames, r, c] == instance
+        own[p] = hits.mean() > 0.8
+    idx = np.flatnonzero(own & vis[:, reference])
+    if len(idx) < min_tracks:
+        return rots, trans, good
+    src, ok_src = _lift_tracks(clip, reference, tr[idx, reference])
+    for t in range(T):
+        if t == reference:
+            continue
+        use = vis[idx, t] & ok_src
+        if use.sum() < min_tracks:
+            continue
+        dst, ok = _lift_tracks(clip, t, tr[idx[use], t])
+        s = src[use][ok]
+        d = dst[ok]
+        if len(s) < min_tracks:
+            continue
+        w = np.ones(len(s))
+        for _ in range(robust_iters):
+            rot, tv = kabsch(s, d, w)
+            res = np.linalg.norm(s @ rot.T + tv - d, axis=1)
+            scale = max(np.median(res) * 3.0, 1e-4)
+            w = 1.0 / (1.0 + (res / scale) ** 2)
+        rots[t], trans[t], good[t] = rot, tv, True
+    # fill frames without an estimate: hold the nearest estimated frame
+    est = np.flatnonzero(good)
+    for t in np.flatnonzero(~good):
+        k = est[np.argmin(np.abs(est - t))]
+        rots[t], trans[t] = rots[k], trans[k]
+    return rots, trans, good
+
+
+def estimate_background_color(clip: GeneratedClip) -> tuple[float, float, float]:
+    """Colour of the pixels with no depth (nothing drawn there: sky / backdrop), median over the clip;
+    mid-grey if every pixel has a depth."""
+    if clip.depth is None:
+        return (0.5, 0.5, 0.5)
+    empty = clip.depth <= 0
+    if not empty.any():
+        return (0.5, 0.5, 0.5)
+    rgb = np.median(clip.frames[empty].astype(np.float64), axis=0) / 255.0
+    return tuple(float(x) for x in np.clip(rgb, 0, 1))

@@ -1,0 +1,96 @@
+"""Losses of the 4D fit: photometric (L1 + SSIM), depth, masks, tracks, and scaffold regularisers."""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+
+__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "mask_loss", "empty_alpha_loss", "track_loss",
+           "arap_loss", "smooth_motion_loss", "psnr_torch"]
+
+_WINDOWS: dict[tuple, torch.Tensor] = {}
+
+
+def _window(channels: int, dtype: torch.dtype) -> torch.Tensor:
+    key = (channels, dtype)
+    if key not in _WINDOWS:
+        x = torch.arange(11, dtype=torch.float64) - 5
+        g = torch.exp(-(x ** 2) / (2 * 1.5 ** 2))
+        g = g / g.sum()
+        w = (g[:, None] * g[None, :]).to(dtype)
+        _WINDOWS[key] = w.expand(channels, 1, 11, 11).contiguous()
+    return _WINDOWS[key]
+
+
+def ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """1 - SSIM of two [H, W, C] images (Gaussian window 11, sigma 1.5)."""
+    x = a.permute(2, 0, 1)[None]
+    y = b.permute(2, 0, 1)[None]
+    c = x.shape[1]
+    w = _window(c, x.dtype)
+    mx = F.conv2d(x, w, padding=5, groups=c)
+    my = F.conv2d(y, w, padding=5, groups=c)
+    sxx = F.conv2d(x * x, w, padding=5, groups=c) - mx * mx
+    syy = F.conv2d(y * y, w, padding=5, groups=c) - my * my
+    sxy = F.conv2d(x * y, w, padding=5, groups=c) - mx * my
+    c1, c2 = 0.01 ** 2, 0.03 ** 2
+    s = ((2 * mx * my + c1) * (2 * sxy + c2)) / ((mx * mx + my * my + c1) * (sxx + syy + c2))
+    return 1.0 - s.mean()
+
+
+def photometric_loss(pred: torch.Tensor, target: torch.Tensor, ssim_weight: float = 0.2) -> torch.Tensor:
+    """(1 - w) L1 + w (1 - SSIM)."""
+    return (1 - ssim_weight) * (pred - target).abs().mean() + ssim_weight * ssim_loss(pred, target)
+
+
+def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
+    """Relative L1 depth error where the prior has a depth and the render is mostly opaque."""
+    valid = (target > 0) & (alpha.detach() > 0.5)
+    if not valid.any():
+        return pred.sum() * 0.0
+    return ((pred[valid] - target[valid]).abs() / target[valid]).mean()
+
+
+def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor) -> torch.Tensor:
+    """MSE between rendered soft instance maps [H, W, K] and one-hot masks [H, W, K]."""
+    return ((soft - target_onehot) ** 2).mean()
+
+
+def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:
+    """Mean opacity over the pixels where the prior says nothing is drawn."""
+    if not empty.any():
+        return alpha.sum() * 0.0
+    return alpha[empty].mean()
+
+
+def track_loss(pred_uv: torch.Tensor, target_uv: torch.Tensor, visible: torch.Tensor, size: float) -> torch.Tensor:
+    """Mean L1 distance (in units of the image size) of projected track points to their 2D tracks."""
+    if not visible.any():
+        return pred_uv.sum() * 0.0
+    return ((pred_uv[visible] - target_uv[visible]).abs().sum(-1) / size).mean()
+
+
+def arap_loss(node_pos_t: torch.Tensor, node_pos_0: torch.Tensor, pairs: torch.Tensor) -> torch.Tensor:
+    """As-rigid-as-possible: distances between neighbouring nodes [P, 2] keep their canonical length."""
+    if pairs.numel() == 0:
+        return node_pos_t.sum() * 0.0
+    d_t = (node_pos_t[pairs[:, 0]] - node_pos_t[pairs[:, 1]]).norm(dim=-1)
+    d_0 = (node_pos_0[pairs[:, 0]] - node_pos_0[pairs[:, 1]]).norm(dim=-1)
+    return ((d_t - d_0) ** 2).mean()
+
+
+def smooth_motion_loss(node_quats: torch.Tensor, node_trans: torch.Tensor, frames: torch.Tensor) -> torch.Tensor:
+    """Second differences of node translations and rotations around the given frames [F] (1..T-2)."""
+    if node_trans.shape[1] == 0 or frames.numel() == 0:
+        return node_trans.sum() * 0.0
+    a, b, c = frames - 1, frames, frames + 1
+    acc_t = node_trans[a] - 2 * node_trans[b] + node_trans[c]
+    q = node_quats / node_quats.norm(dim=-1, keepdim=True)
+    acc_q = q[a] - 2 * q[b] + q[c]
+    return (acc_t ** 2).sum(-1).mean() + (acc_q ** 2).sum(-1).mean()
+
+
+def psnr_torch(a: torch.Tensor, b: torch.Tensor) -> float:
+    """PSNR in dB of two images in [0, 1]."""
+    mse = float(((a - b) ** 2).mean())
+    return float("inf") if mse == 0 else 10.0 * float(torch.log10(torch.tensor(1.0 / mse)))
