@@ -9,8 +9,8 @@ import pytest
 torch = pytest.importorskip("torch")
 pytest.importorskip("diffusers")
 
-from morphosim_gym.errors import BackendUnavailableError  # noqa: E402
-from morphosim_gym.generate.diffusion import (  # noqa: E402
+from morphosim_gym.errors import BackendUnavailableError
+from morphosim_gym.generate.diffusion import (
     AttentionStore,
     DefaultPriorEstimators,
     DiffusionClipBackend,
@@ -29,13 +29,13 @@ from morphosim_gym.generate.diffusion import (  # noqa: E402
     tokens_to_latent_grid,
     trajectory_loss,
 )
-from morphosim_gym.generate.diffusion.testing import (  # noqa: E402
+from morphosim_gym.generate.diffusion.testing import (
     make_tiny_pipeline,
     make_tiny_scheduler,
     make_tiny_tokenizer,
     make_tiny_transformer,
 )
-from morphosim_gym.scene import Camera, GeneratedClip  # noqa: E402
+from morphosim_gym.scene import Camera, GeneratedClip
 
 T_LAT, H_LAT, W_LAT, P = 3, 16, 16, 2  # tiny latents: 3 latent frames (9 video frames), 16 x 16, patch 2
 
@@ -254,6 +254,18 @@ def test_guidance_lowers_energy_and_moves_attention_into_boxes(tiny):
     assert torch.equal(x1, x2) and again.energy == guided.energy
 
 
+def test_guidance_with_gradient_checkpointing_enabled(tiny):
+    tr = tiny["transformer"]
+    tr.enable_gradient_checkpointing()
+    try:
+        _, with_ckpt = _sample(tiny, GuidanceConfig(strength=0.25, guidance_steps=2, inner_iters=1))
+        assert tr.gradient_checkpointing  # restored
+    finally:
+        tr.disable_gradient_checkpointing()
+    _, without = _sample(tiny, GuidanceConfig(strength=0.25, guidance_steps=2, inner_iters=1))
+    assert with_ckpt.energy == without.energy
+
+
 def test_guidance_options(tiny):
     # explicit step list, linear schedule, raw gradients, one hooked layer, joint normalisation
     cfg = GuidanceConfig(strength=200.0, guidance_steps=(0, 2), inner_iters=1, strength_schedule="linear",
@@ -292,6 +304,26 @@ def test_words_to_token_indices():
         token_indices_for_words(tok, prompt, ["left"], 4)
 
 
+def test_words_to_token_indices_with_a_sentencepiece_t5_tokenizer(tmp_path):
+    """The real CogVideoX tokenizer is T5's SentencePiece one: words split into several pieces, some
+    preceded by a bare "▁" piece, which is not counted as a motion token."""
+    pytest.importorskip("sentencepiece")
+    pytest.importorskip("google.protobuf")
+    from morphosim_gym.generate.diffusion.testing import make_tiny_t5_tokenizer
+
+    tok = make_tiny_t5_tokenizer(str(tmp_path / "tokenizer"))
+    assert type(tok).__name__ == "T5Tokenizer"
+    prompt = "A sleek black motorcycle is gliding from right to left"
+    ids = tok(prompt, padding="max_length", max_length=64, truncation=True)["input_ids"]
+    pieces = tok.convert_ids_to_tokens(ids)
+    idx = token_indices_for_words(tok, prompt, ["motorcycle"], 64)
+    assert "".join(pieces[i] for i in idx) == "\u2581motorcycle"
+    both = token_indices_for_words(tok, prompt, ["black", "motorcycle"], 64)
+    assert "".join(pieces[i] for i in both) == "\u2581black\u2581motorcycle"
+    is_idx = token_indices_for_words(tok, prompt, ["is"], 64)
+    assert [pieces[i] for i in is_idx] == ["is"]  # the bare "\u2581" before it is left out
+
+
 # ------------------------------------------------------------------------------------------- backend
 def _config(path, **kw):
     return DiffusionConfig(weights_path=path, device="cpu", num_inference_steps=6, height=128, width=128,
@@ -323,7 +355,7 @@ def test_generate_end_to_end_from_local_weights(tiny_weights):
     assert clip.depth.shape == (9, 128, 128) and clip.depth.max() > 0 and clip.depth[:, 0].max() == 0  # sky: unknown
     assert clip.masks.shape == (9, 128, 128) and clip.labels == {0: "red ball"}
     assert (clip.masks[0] == 0).any() and (clip.masks == -1).any()
-    ys, xs = np.nonzero(clip.masks[-1] == 0)  # the last frame's mask lies inside the last box
+    _, xs = np.nonzero(clip.masks[-1] == 0)  # the last frame's mask lies inside the last box
     assert xs.min() >= np.floor(0.05 * 128) and xs.max() < np.ceil(0.45 * 128)
     assert clip.tracks.shape[1:] == (9, 2) and clip.track_visible.shape == clip.tracks.shape[:2]
     assert clip.track_visible[:, 0].all()
@@ -347,6 +379,8 @@ def test_generate_with_prompt_embeds_and_explicit_tokens(tiny):
     assert clip.frames.shape == (9, 128, 128, 3)
     assert clip.cameras[0] == camera.resized(128, 128)
     assert clip.info["token_indices"] == [[3]]
+    plain = backend.generate("a ball", [], seed=0, prompt_embeds=tiny["embeds"])  # no targets: plain sampling
+    assert plain.masks is None and plain.info["guidance"] is None and plain.tracks is not None
     with pytest.raises(ValueError, match="token_indices"):
         backend.generate("a ball", [GuidanceTarget(["ball"], _boxes_right_to_left())], seed=0,
                          prompt_embeds=tiny["embeds"])

@@ -12,14 +12,25 @@ Public names:
 Importing this package does not import diffusers; constructing the backend does.
 """
 
-from .attention import (AttentionStore, EarlyExit, TrajectoryAttnProcessor, attention_layer_names,
-                        install_trajectory_processors, tokens_to_latent_grid)
+from .attention import (
+                        AttentionStore,
+                        EarlyExit,
+                        TrajectoryAttnProcessor,
+                        attention_layer_names,
+                        install_trajectory_processors,
+                        tokens_to_latent_grid,
+)
 from .backend import DEFAULT_EYE, DEFAULT_FOV_Y_DEG, DEFAULT_TARGET, DiffusionClipBackend, DiffusionConfig
 from .energy import frame_energy, in_box_fraction, target_attention, trajectory_loss
 from .priors import DefaultPriorEstimators, PriorEstimators, flow_tracks, ground_plane_depth
 from .sampler import GuidanceConfig, GuidanceTrace, cogvideox_rotary_embeddings, guided_sample
-from .targets import (GuidanceTarget, boxes_to_latent_frames, latent_frame_groups, rasterize_boxes,
-                      token_indices_for_words)
+from .targets import (
+                        GuidanceTarget,
+                        boxes_to_latent_frames,
+                        latent_frame_groups,
+                        rasterize_boxes,
+                        token_indices_for_words,
+)
 
 __all__ = [
     "DiffusionClipBackend", "DiffusionConfig", "DEFAULT_EYE", "DEFAULT_FOV_Y_DEG", "DEFAULT_TARGET",

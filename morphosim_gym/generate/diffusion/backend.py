@@ -19,9 +19,10 @@ import dataclasses
 import json
 import math
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -110,7 +111,7 @@ class DiffusionConfig:
         self.camera_target = tuple(float(x) for x in self.camera_target)
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> "DiffusionConfig":
+    def from_dict(cls, d: Mapping[str, Any]) -> DiffusionConfig:
         """From a (YAML) mapping; unknown keys raise a ValueError naming them."""
         known = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(d) - known)
@@ -187,7 +188,8 @@ class DiffusionClipBackend:
         config: `DiffusionConfig`; its weights_path is checked here (BackendUnavailableError
             naming the path when missing or invalid) and loaded on first use (or by `load`).
         pipeline: an already built diffusers `CogVideoXPipeline` to use instead of loading
-            weights (tests use tiny random ones); weights_path is then ignored.
+            weights (tests use tiny random ones); weights_path is then ignored. It is moved to
+            the configured device and dtype in place and its modules are frozen (eval, no grad).
         priors: depth / masks / tracks estimators (default `DefaultPriorEstimators`, heuristic).
 
     Examples:
@@ -386,7 +388,7 @@ class DiffusionClipBackend:
             pipe.transformer, pipe.scheduler, noise, prompt_embeds, negative_prompt_embeds, token_indices, boxes_lat,
             cfg.guidance, num_inference_steps=cfg.num_inference_steps, guidance_scale=cfg.guidance_scale,
             use_dynamic_cfg=cfg.use_dynamic_cfg, generator=torch.Generator(device="cpu").manual_seed(int(seed) + 1),
-            record=bool(targets))
+            record=True)
         t_sample = time.perf_counter() - t_start
 
         # decode

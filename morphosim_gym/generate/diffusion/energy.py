@@ -9,7 +9,7 @@ fraction of each latent cell), so the "in-box mass" is ``sum_u M_{i,u} A_{i,u,n}
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import torch
 

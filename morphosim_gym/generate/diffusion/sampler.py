@@ -17,10 +17,12 @@ then take the ordinary scheduler step from the updated latents.
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -208,6 +210,12 @@ def guided_sample(
     Model dtype (fp32 / bf16 / fp16) and device follow the transformer; latents, guidance
     gradients and the scheduler step are kept in float32.
 
+    Memory: a guided forward keeps autograd state only up to the last hooked layer (the forward
+    stops there), and attention normalisers are checkpointed per chunk of queries, so the cost is
+    about one training-style forward/backward through the hooked prefix of the model at batch 1.
+    On large models hook fewer / earlier layers (`GuidanceConfig.layers`) to cut it. Gradient
+    checkpointing of the transformer is not used during the run.
+
     Args:
         transformer: the denoiser; its attention processors are swapped for the run and restored.
         scheduler: the noise scheduler (its timesteps are reset here).
@@ -294,7 +302,15 @@ def guided_sample(
 
     guidance_scale_now = guidance_scale
     old_pred_original_sample = None
-    with install_trajectory_processors(transformer, store, cfg.layers) as names:
+    # gradient checkpointing would re-run the hooked processors during backward with recording off
+    # (a different set of saved tensors), so it is switched off for the run and restored afterwards
+    checkpointing = bool(getattr(transformer, "gradient_checkpointing", False))
+    if checkpointing:
+        transformer.gradient_checkpointing = False
+    with contextlib.ExitStack() as restore:
+        if checkpointing:
+            restore.callback(setattr, transformer, "gradient_checkpointing", True)
+        names = restore.enter_context(install_trajectory_processors(transformer, store, cfg.layers))
         for i, t in enumerate(timesteps):
             # --- trajectory guidance: gradient steps on E w.r.t. the latents
             if i in strengths:

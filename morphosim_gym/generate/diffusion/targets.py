@@ -17,8 +17,9 @@ This module also holds the three pure mappings the guidance needs:
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -108,7 +109,7 @@ def latent_frame_groups(num_video_frames: int, temporal_compression: int) -> lis
     t = int(num_video_frames)
     if r < 1 or t < 1 or (t - 1) % r:
         raise ValueError(f"Expected num_video_frames = 1 + {r} k for temporal compression {r}, found {t}")
-    return [range(0, 1)] + [range(1 + r * k, 1 + r * (k + 1)) for k in range((t - 1) // r)]
+    return [range(1)] + [range(1 + r * k, 1 + r * (k + 1)) for k in range((t - 1) // r)]
 
 
 def boxes_to_latent_frames(boxes: np.ndarray, temporal_compression: int) -> np.ndarray:
@@ -162,7 +163,8 @@ def token_indices_for_words(tokenizer: Any, prompt: str, words: Sequence[str], m
     `max_sequence_length`, truncation, special tokens), so the indices address rows of the
     prompt embeddings. With a fast tokenizer the character offsets pick every token overlapping a
     whole-word, case-insensitive occurrence of each word; otherwise the word's own token ids are
-    searched for as a subsequence of the prompt's ids.
+    searched for as a subsequence of the prompt's ids. Bare SentencePiece word-boundary pieces
+    ("▁" alone) are left out: they belong to no word in particular.
 
     Raises:
         ValueError: a word does not occur in the prompt, or its tokens were truncated away.
@@ -191,5 +193,9 @@ def token_indices_for_words(tokenizer: Any, prompt: str, words: Sequence[str], m
         if not hits:
             raise ValueError(f"Expected tokens for the motion word {word!r} within the first {max_sequence_length} "
                              f"tokens of the prompt, found none (truncated or tokenized differently)")
-        found |= hits
+        # SentencePiece (T5) may emit a bare word-boundary piece "▁" before a word; it is shared by
+        # every word, so it is not a motion token unless it is all there is
+        pieces = tokenizer.convert_ids_to_tokens([ids[k] for k in sorted(hits)])
+        specific = {k for k, piece in zip(sorted(hits), pieces) if str(piece).replace("\u2581", "").strip()}
+        found |= specific or hits
     return sorted(found)

@@ -8,11 +8,12 @@ diffusion backend's plumbing and guidance on a CPU; never for image quality.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import torch
 
-__all__ = ["TINY_VOCAB", "make_tiny_transformer", "make_tiny_vae", "make_tiny_scheduler", "make_tiny_tokenizer",
+__all__ = ["TINY_VOCAB", "make_tiny_t5_tokenizer", "make_tiny_transformer", "make_tiny_vae", "make_tiny_scheduler", "make_tiny_tokenizer",
            "make_tiny_text_encoder", "make_tiny_pipeline"]
 
 TINY_VOCAB: tuple[str, ...] = (
@@ -71,6 +72,34 @@ def make_tiny_tokenizer(vocab: Sequence[str] = TINY_VOCAB) -> Any:
     tok.post_processor = processors.TemplateProcessing(single="$A </s>", special_tokens=[("</s>", 1)])
     return PreTrainedTokenizerFast(tokenizer_object=tok, pad_token="<pad>", eos_token="</s>", unk_token="<unk>",
                                    model_max_length=MAX_TEXT_LEN)
+
+
+def make_tiny_t5_tokenizer(directory: str, vocab_size: int = 40) -> Any:
+    """A `T5Tokenizer` from a SentencePiece model trained here on a few sentences, saved in the layout
+    of a real CogVideoX ``tokenizer/`` folder (``spiece.model`` + ``tokenizer_config.json``) and
+    loaded back with `AutoTokenizer`. Needs the sentencepiece and protobuf packages (as real
+    CogVideoX tokenizers do with transformers 5)."""
+    import json
+    import os
+
+    import sentencepiece as spm
+    from transformers import AutoTokenizer
+
+    os.makedirs(directory, exist_ok=True)
+    corpus = os.path.join(directory, "corpus.txt")
+    with open(corpus, "w") as f:
+        f.write("\n".join(["a red ball rolls from right to left", "the bus moves quickly to the right",
+                           "a small boat glides on the water", "a black motorcycle is gliding from right to left",
+                           "the fish swims through the water"] * 20))
+    spm.SentencePieceTrainer.train(input=corpus, model_prefix=os.path.join(directory, "spiece"),
+                                   vocab_size=vocab_size, model_type="unigram", pad_id=0, eos_id=1, unk_id=2,
+                                   bos_id=-1, character_coverage=1.0, minloglevel=2)
+    os.remove(corpus)
+    os.remove(os.path.join(directory, "spiece.vocab"))
+    with open(os.path.join(directory, "tokenizer_config.json"), "w") as f:
+        json.dump({"tokenizer_class": "T5Tokenizer", "model_max_length": 226, "extra_ids": 0, "eos_token": "</s>",
+                   "pad_token": "<pad>", "unk_token": "<unk>"}, f)
+    return AutoTokenizer.from_pretrained(directory)
 
 
 def make_tiny_text_encoder(vocab_size: int, seed: int = 0) -> Any:
