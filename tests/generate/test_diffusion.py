@@ -9,8 +9,8 @@ import pytest
 torch = pytest.importorskip("torch")
 pytest.importorskip("diffusers")
 
-from morphosim_gym.errors import BackendUnavailableError
-from morphosim_gym.generate.diffusion import (
+from morphosim_gym.errors import BackendUnavailableError  # noqa: E402
+from morphosim_gym.generate.diffusion import (  # noqa: E402
     AttentionStore,
     DefaultPriorEstimators,
     DiffusionClipBackend,
@@ -29,13 +29,13 @@ from morphosim_gym.generate.diffusion import (
     tokens_to_latent_grid,
     trajectory_loss,
 )
-from morphosim_gym.generate.diffusion.testing import (
+from morphosim_gym.generate.diffusion.testing import (  # noqa: E402
     make_tiny_pipeline,
     make_tiny_scheduler,
     make_tiny_tokenizer,
     make_tiny_transformer,
 )
-from morphosim_gym.scene import Camera, GeneratedClip
+from morphosim_gym.scene import Camera, GeneratedClip  # noqa: E402
 
 T_LAT, H_LAT, W_LAT, P = 3, 16, 16, 2  # tiny latents: 3 latent frames (9 video frames), 16 x 16, patch 2
 
@@ -121,7 +121,7 @@ def test_recorded_attention_is_the_explicit_softmax(tiny):
         store = AttentionStore(token_indices=idx, normalization=normalization, recording=True, chunk_size=64)
         with install_trajectory_processors(tr, store) as names:
             _forward(tr, tiny["noise"], tiny["embeds"])
-        for name, (probs, q, k) in zip(names, sink):
+        for name, (probs, q, k) in zip(names, sink, strict=True):
             if normalization == "joint":  # the model's own probabilities: video queries -> text keys idx
                 want = probs[:, :, n_text:, idx].mean(1)
             else:  # softmax over the text keys only: the paper's sum_n A_{u,n} = 1

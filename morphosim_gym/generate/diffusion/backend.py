@@ -176,7 +176,8 @@ def _import_diffusers() -> Any:
     try:
         import diffusers
     except ImportError as e:
-        raise BackendUnavailableError(f"The diffusion backend needs diffusers, which is not installed: {PIP_HINT}") from e
+        raise BackendUnavailableError(
+            f"The diffusion backend needs diffusers, which is not installed: {PIP_HINT}") from e
     return diffusers
 
 

@@ -13,8 +13,8 @@ from typing import Any
 
 import torch
 
-__all__ = ["TINY_VOCAB", "make_tiny_t5_tokenizer", "make_tiny_transformer", "make_tiny_vae", "make_tiny_scheduler", "make_tiny_tokenizer",
-           "make_tiny_text_encoder", "make_tiny_pipeline"]
+__all__ = ["TINY_VOCAB", "make_tiny_pipeline", "make_tiny_scheduler", "make_tiny_t5_tokenizer",
+           "make_tiny_text_encoder", "make_tiny_tokenizer", "make_tiny_transformer", "make_tiny_vae"]
 
 TINY_VOCAB: tuple[str, ...] = (
     "a", "an", "the", "red", "blue", "green", "yellow", "black", "white", "small", "big", "ball", "bus", "car",
