@@ -195,7 +195,8 @@ def token_indices_for_words(tokenizer: Any, prompt: str, words: Sequence[str], m
                              f"tokens of the prompt, found none (truncated or tokenized differently)")
         # SentencePiece (T5) may emit a bare word-boundary piece "▁" before a word; it is shared by
         # every word, so it is not a motion token unless it is all there is
-        pieces = tokenizer.convert_ids_to_tokens([ids[k] for k in sorted(hits)])
-        specific = {k for k, piece in zip(sorted(hits), pieces, strict=True) if str(piece).replace("\u2581", "").strip()}
+        order = sorted(hits)
+        pieces = tokenizer.convert_ids_to_tokens([ids[k] for k in order])
+        specific = {k for k, piece in zip(order, pieces, strict=True) if str(piece).replace("\u2581", "").strip()}
         found |= specific or hits
     return sorted(found)
