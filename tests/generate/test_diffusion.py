@@ -267,12 +267,16 @@ def test_guidance_with_gradient_checkpointing_enabled(tiny):
 
 
 def test_guidance_options(tiny):
-    # explicit step list, linear schedule, raw gradients, one hooked layer, joint normalisation
+    # explicit step list, linear schedule, raw gradients, one hooked layer, joint normalisation, DPM scheduler
+    from diffusers import CogVideoXDPMScheduler
+
     cfg = GuidanceConfig(strength=200.0, guidance_steps=(0, 2), inner_iters=1, strength_schedule="linear",
                          grad_normalization="none", layers=(-1,), attention_normalization="joint")
     assert cfg.step_strengths(8) == {0: 200.0, 2: 100.0}
-    _, tr_ = _sample(tiny, cfg)
-    assert [d["step"] for d in tr_.guidance] == [0, 2]
+    dpm = CogVideoXDPMScheduler.from_config(tiny["scheduler"].config)
+    x, tr_ = guided_sample(tiny["transformer"], dpm, tiny["noise"], tiny["embeds"], tiny["negative"], [[3]], BOXES,
+                           cfg, num_inference_steps=8, record=True, generator=torch.Generator().manual_seed(0))
+    assert [d["step"] for d in tr_.guidance] == [0, 2] and torch.isfinite(x).all()
     assert tr_.guidance[1]["strength"] == 100.0
     with pytest.raises(ValueError, match="guidance.inner_iters"):
         GuidanceConfig(inner_iters=0)
@@ -389,6 +393,20 @@ def test_generate_with_prompt_embeds_and_explicit_tokens(tiny):
     with pytest.raises(ValueError, match="9 boxes"):
         backend.generate("a ball", [GuidanceTarget(["ball"], np.tile([0, 0, 1, 1.0], (5, 1)), token_indices=[3])],
                          seed=0, prompt_embeds=tiny["embeds"])
+
+
+def test_cogvideox15_style_transformer_pads_latent_frames(tiny):
+    """CogVideoX 1.5 patches 2 latent frames per token: 3 latent frames are padded to 4 at the start (as the
+    pipeline does), guided on the padded grid, and the padding is dropped before decoding."""
+    pipe = make_tiny_pipeline(seed=0, text_encoder=False)
+    pipe.transformer = make_tiny_transformer(seed=0, patch_size_t=2)
+    backend = DiffusionClipBackend(_config(None), pipeline=pipe)
+    target = GuidanceTarget(["ball"], _boxes_right_to_left(), token_indices=[3])
+    clip = backend.generate("a ball", [target], seed=0, prompt_embeds=tiny["embeds"],
+                            negative_prompt_embeds=tiny["negative"])
+    assert clip.frames.shape == (9, 128, 128, 3) and clip.masks.shape == (9, 128, 128)
+    g = clip.info["guidance"]["guidance"]
+    assert g[-1]["energy"] < g[0]["energy"]
 
 
 def test_generate_in_bfloat16(tiny):

@@ -45,6 +45,11 @@ __all__ = [
 ]
 
 
+# cap on the scores materialised at once when computing normalisers (64 Mi elements = 256 MiB in
+# float32): with "joint" normalisation on CogVideoX-2b (30 heads, ~17.8k keys) that is ~125 queries
+_MAX_CHUNK_ELEMENTS = 1 << 26
+
+
 class EarlyExit(Exception):
     """Raised by the processor of the last recorded layer when ``AttentionStore.stop_after`` is
     set: the guidance forward only needs attention maps, not the noise prediction."""
@@ -59,7 +64,8 @@ class AttentionStore:
         normalization: ``"text"`` or ``"joint"`` (see the module docstring).
         batch_rows: batch rows to keep (e.g. ``[1]`` for the conditional half of a CFG batch);
             None keeps all.
-        chunk_size: video queries per chunk when computing normalisers.
+        chunk_size: at most this many video queries per chunk when computing normalisers (chunks
+            are also capped at 64 Mi score elements).
         recording: the processors record only while this is True.
         stop_after: layer name after whose recording `EarlyExit` is raised (None: never).
         maps: layer name -> [B', N_video, K] float32 head-averaged attention of the last forward.
@@ -182,10 +188,13 @@ class TrajectoryAttnProcessor:
         if rows is not None:
             k_sel = k_sel.index_select(0, rows)
         grad = torch.is_grad_enabled() and (q.requires_grad or keys.requires_grad)
+        # queries per chunk: at most chunk_size, and at most _MAX_CHUNK_ELEMENTS scores per chunk
+        per_query = q.shape[0] * q.shape[1] * keys.shape[2]
+        chunk = max(1, min(int(store.chunk_size), _MAX_CHUNK_ELEMENTS // per_query))
         lse = []
-        for s in range(0, q.shape[2], int(store.chunk_size)):
-            qc = q[:, :, s:s + int(store.chunk_size)]
-            bc = None if bias is None else bias[:, :, s:s + int(store.chunk_size)]
+        for s in range(0, q.shape[2], chunk):
+            qc = q[:, :, s:s + chunk]
+            bc = None if bias is None else bias[:, :, s:s + chunk]
             if grad:
                 lse.append(checkpoint(_log_normaliser, qc, keys, scale, bc, use_reentrant=False))
             else:
