@@ -91,10 +91,11 @@ class DiffusionConfig:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
                 raise ValueError(f"Expected diffusion.{name} as a positive integer, found {v!r}")
             setattr(self, name, int(v))
-        for name in ("guidance_scale", "fps", "fov_y_deg"):
+        for name, low in (("guidance_scale", 0.0), ("fps", None), ("fov_y_deg", None)):
             v = float(getattr(self, name))
-            if not math.isfinite(v) or (name != "guidance_scale" and v <= 0) or v < 0:
-                raise ValueError(f"Expected diffusion.{name} as a finite number > 0, found {getattr(self, name)!r}")
+            if not math.isfinite(v) or (v < low if low is not None else v <= 0):
+                want = f">= {low}" if low is not None else "> 0"
+                raise ValueError(f"Expected diffusion.{name} as a finite number {want}, found {getattr(self, name)!r}")
             setattr(self, name, v)
         if self.fov_y_deg >= 180:
             raise ValueError(f"Expected diffusion.fov_y_deg in (0, 180), found {self.fov_y_deg}")
@@ -107,8 +108,11 @@ class DiffusionConfig:
         if not isinstance(self.guidance, GuidanceConfig):
             raise ValueError(f"Expected diffusion.guidance as a GuidanceConfig or a mapping, found "
                              f"{type(self.guidance).__name__}")
-        self.camera_eye = tuple(float(x) for x in self.camera_eye)
-        self.camera_target = tuple(float(x) for x in self.camera_target)
+        for name in ("camera_eye", "camera_target"):
+            v = np.asarray(getattr(self, name), dtype=np.float64)
+            if v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise ValueError(f"Expected diffusion.{name} as 3 finite numbers, found {getattr(self, name)!r}")
+            setattr(self, name, tuple(float(x) for x in v))
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> DiffusionConfig:
