@@ -163,6 +163,7 @@ def test_energy_whole_frame_box_is_zero_and_all_outside_is_one():
     quarter = torch.from_numpy(rasterize_boxes(np.tile([0.25, 0.25, 0.75, 0.75], (T_LAT, 1)), H_LAT, W_LAT))
     torch.testing.assert_close(in_box_fraction(uniform, quarter), torch.full((T_LAT,), 0.25))
     assert float(trajectory_loss(uniform, quarter)) == pytest.approx(0.5625)
+    assert float(trajectory_loss(uniform, quarter, "sum")) == pytest.approx(0.5625 * T_LAT)
 
 
 def test_rasterize_boxes_soft_coverage():
@@ -271,7 +272,8 @@ def test_guidance_options(tiny):
     from diffusers import CogVideoXDPMScheduler
 
     cfg = GuidanceConfig(strength=200.0, guidance_steps=(0, 2), inner_iters=1, strength_schedule="linear",
-                         grad_normalization="none", layers=(-1,), attention_normalization="joint")
+                         grad_normalization="none", layers=(-1,), attention_normalization="joint",
+                         frame_reduction="sum")
     assert cfg.step_strengths(8) == {0: 200.0, 2: 100.0}
     dpm = CogVideoXDPMScheduler.from_config(tiny["scheduler"].config)
     x, tr_ = guided_sample(tiny["transformer"], dpm, tiny["noise"], tiny["embeds"], tiny["negative"], [[3]], BOXES,

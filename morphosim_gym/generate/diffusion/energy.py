@@ -51,13 +51,20 @@ def frame_energy(attn: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
     return (1.0 - in_box_fraction(attn, masks)) ** 2
 
 
-def trajectory_loss(attn: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """The guidance loss: E_i averaged over frames, then over targets (and batch).
+def trajectory_loss(attn: torch.Tensor, masks: torch.Tensor, frame_reduction: str = "mean") -> torch.Tensor:
+    """The guidance loss: E_i reduced over frames (mean, or the paper's plain sum), then averaged
+    over targets (and batch).
 
     Args:
         attn: [..., N_targets, T, H, W]; masks: broadcastable to it.
+        frame_reduction: "mean" (E in [0, 1]) or "sum" (sum_i E_i, in [0, T]).
 
     Returns:
-        scalar tensor in [0, 1].
+        scalar tensor.
     """
-    return frame_energy(attn, masks).mean()
+    fe = frame_energy(attn, masks)
+    if frame_reduction == "sum":
+        return fe.sum(dim=-1).mean()
+    if frame_reduction != "mean":
+        raise ValueError(f"Expected frame_reduction 'mean' or 'sum', found {frame_reduction!r}")
+    return fe.mean()

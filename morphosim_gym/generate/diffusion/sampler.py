@@ -52,7 +52,10 @@ class GuidanceConfig:
             names); None hooks all blocks.
         attention_normalization: ``"text"`` (softmax over text keys: the paper's sum_n A = 1)
             or ``"joint"`` (the model's own softmax over text + video keys).
-        min_energy: stop the inner iterations of a step once E is at or below this.
+        frame_reduction: how the loss combines the latent frames' E_i: ``"mean"`` (default;
+            E in [0, 1], independent of clip length) or ``"sum"`` (sum_i E_i). Only the gradient's
+            scale differs, which ``grad_normalization="rms"`` removes.
+        min_energy: stop the inner iterations of a step once the loss is at or below this.
         chunk_size: video queries per chunk when computing attention normalisers.
     """
 
@@ -64,6 +67,7 @@ class GuidanceConfig:
     grad_normalization: str = "rms"
     layers: tuple[int | str, ...] | None = None
     attention_normalization: str = "text"
+    frame_reduction: str = "mean"
     min_energy: float = 0.0
     chunk_size: int = 4096
 
@@ -95,10 +99,12 @@ class GuidanceConfig:
         if self.attention_normalization not in ("text", "joint"):
             raise ValueError(f"Expected guidance.attention_normalization 'text' or 'joint', found "
                              f"{self.attention_normalization!r}")
+        if self.frame_reduction not in ("mean", "sum"):
+            raise ValueError(f"Expected guidance.frame_reduction 'mean' or 'sum', found {self.frame_reduction!r}")
         if self.layers is not None:
             self.layers = tuple(self.layers)
-        if not 0.0 <= float(self.min_energy) <= 1.0:
-            raise ValueError(f"Expected guidance.min_energy in [0, 1], found {self.min_energy}")
+        if not float(self.min_energy) >= 0.0:
+            raise ValueError(f"Expected guidance.min_energy >= 0, found {self.min_energy}")
         if int(self.chunk_size) < 1:
             raise ValueError(f"Expected guidance.chunk_size >= 1, found {self.chunk_size}")
 
@@ -134,7 +140,8 @@ class GuidanceTrace:
             that step's classifier-free-guidance forward (after any guidance updates).
         in_box: per step, the attention mass fraction inside the boxes (mean over targets, frames).
         frame_energy: [n_steps, N_targets, T_lat] E_i per step.
-        guidance: one dict per inner guidance iteration: step, iter, energy (before the update),
+        guidance: one dict per inner guidance iteration: step, iter, energy (the loss before the
+            update, reduced over frames as `GuidanceConfig.frame_reduction` says),
             grad_rms, strength.
         attention: [N_targets, T_lat, H_lat, W_lat] attention of the last step on the latent grid.
         attention_mean: the same averaged over all steps.
@@ -320,7 +327,7 @@ def guided_sample(
                     store.recording, store.batch_rows, store.stop_after = True, None, names[-1]
                     with torch.enable_grad():
                         forward(scheduler.scale_model_input(xg, t).to(dtype), embeds, t)
-                        loss = trajectory_loss(attention_grid(), masks)
+                        loss = trajectory_loss(attention_grid(), masks, cfg.frame_reduction)
                     store.recording = False
                     e = float(loss.detach())
                     if e <= cfg.min_energy:
