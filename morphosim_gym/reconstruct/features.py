@@ -1,0 +1,250 @@
+"""The distilled feature field (paper, after Feature 4X): a latent f_j per Gaussian, rasterised like
+colour, and small MLP decoders D^s into each 2D encoder's space, trained with MSE against the
+encoders' per-pixel feature maps.
+
+2D encoders are pluggable (`PixelEncoder`). Offline defaults:
+
+* `LabelEmbeddingEncoder` ("semantic"): each pixel is the sentence embedding (MiniLM, the
+  shared `morphosim_gym.language.embeddings`) of its instance label; queries such as "the
+  vehicle" are embedded the same way at edit time;
+* `ColorEncoder` ("color"): each pixel's CIE Lab colour, scaled to about [-1, 1].
+
+`ClipImageEncoder` uses a CLIP-style vision model from a local directory when one is
+configured (transformers `CLIPModel`), with patch features upsampled to pixels.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol, Sequence
+
+import numpy as np
+import torch
+from torch import nn
+from tqdm.auto import tqdm
+
+from ..errors import BackendUnavailableError
+from ..metrics import rgb_to_lab
+from ..render import rasterize
+from ..scene import FeatureDecoder, GeneratedClip
+from .model import DynamicGaussians
+
+__all__ = ["PixelEncoder", "LabelEmbeddingEncoder", "ColorEncoder", "ClipImageEncoder", "FeatureConfig",
+           "distill_features", "MLP"]
+
+
+class PixelEncoder(Protocol):
+    """A 2D feature encoder E^s: per-pixel targets for one frame of a clip."""
+
+    name: str
+    dim: int
+    normalize: bool
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        """(features [H, W, dim] float32, valid [H, W] bool) of a frame."""
+        ...
+
+
+class LabelEmbeddingEncoder:
+    """Each pixel -> the sentence embedding of its instance label (from the clip's masks)."""
+
+    name = "semantic"
+    normalize = True
+
+    def __init__(self) -> None:
+        from ..language import embeddings
+
+        self._emb = embeddings
+        self.dim = embeddings.embedding_dim()
+        self._table: dict[int, np.ndarray] = {}
+
+    def _vectors(self, clip: GeneratedClip) -> dict[int, np.ndarray]:
+        missing = [i for i in clip.labels if i not in self._table]
+        if missing:
+            vecs = self._emb.embed([clip.labels[i] for i in missing])
+            self._table.update({i: v for i, v in zip(missing, vecs)})
+        return self._table
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        if clip.masks is None:
+            raise ValueError("Expected a clip with instance masks for the semantic encoder, found none")
+        table = self._vectors(clip)
+        m = clip.masks[frame]
+        out = np.zeros(m.shape + (self.dim,), np.float32)
+        for inst, vec in table.items():
+            out[m == inst] = vec
+        return out, m >= 0
+
+
+class ColorEncoder:
+    """Each pixel -> its Lab colour scaled to about [-1, 1] (L / 50 - 1, a / 100, b / 100)."""
+
+    name = "color"
+    dim = 3
+    normalize = False
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        lab = rgb_to_lab(clip.frames[frame])
+        out = np.stack([lab[..., 0] / 50.0 - 1.0, lab[..., 1] / 100.0, lab[..., 2] / 100.0], -1).astype(np.float32)
+        valid = clip.depth[frame] > 0 if clip.depth is not None else np.ones(out.shape[:2], bool)
+        return out, valid
+
+
+class ClipImageEncoder:
+    """A CLIP-style vision encoder from local weights (a directory saved by transformers'
+    `CLIPModel.save_pretrained`); patch embeddings projected to the joint space, upsampled to pixels.
+
+    Raises:
+        BackendUnavailableError: transformers missing or no usable model at `path`.
+    """
+
+    name = "clip"
+    normalize = True
+
+    def __init__(self, path: str | Path, device: str = "cpu") -> None:
+        p = Path(path)
+        if not (p / "config.json").exists():
+            raise BackendUnavailableError(f"CLIP encoder: no model at {p} (expected a transformers CLIPModel "
+                                          f"directory with config.json)")
+        try:
+            from transformers import CLIPModel
+        except ImportError as exc:
+            raise BackendUnavailableError(f"CLIP encoder needs transformers: pip install transformers ({exc})") from None
+        self.model = CLIPModel.from_pretrained(str(p), local_files_only=True).eval().to(device)
+        self.device = device
+        self.dim = int(self.model.config.projection_dim)
+        vc = self.model.config.vision_config
+        self.size = int(vc.image_size)
+        self.patch = int(vc.patch_size)
+
+    @torch.no_grad()
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        img = torch.from_numpy(clip.frames[frame].astype(np.float32) / 255.0).permute(2, 0, 1)[None]
+        x = torch.nn.functional.interpolate(img, size=(self.size, self.size), mode="bilinear", align_corners=False)
+        mean = torch.tensor([0.4815, 0.4578, 0.4082])[None, :, None, None]
+        std = torch.tensor([0.2686, 0.2613, 0.2758])[None, :, None, None]
+        out = self.model.vision_model(pixel_values=((x - mean) / std).to(self.device))
+        tokens = self.model.vision_model.post_layernorm(out.last_hidden_state[:, 1:])
+        proj = self.model.visual_projection(tokens)                              # [1, P, dim]
+        g = self.size // self.patch
+        fmap = proj.reshape(1, g, g, self.dim).permute(0, 3, 1, 2)
+        fmap = torch.nn.functional.interpolate(fmap, size=(clip.height, clip.width), mode="bilinear",
+                                               align_corners=False)[0].permute(1, 2, 0)
+        fmap = fmap / fmap.norm(dim=-1, keepdim=True).clamp(min=1e-6)
+        return fmap.cpu().numpy().astype(np.float32), np.ones((clip.height, clip.width), bool)
+
+
+class MLP(nn.Module):
+    """D -> hidden -> out with ReLU (a decoder D^s)."""
+
+    def __init__(self, d_in: int, d_out: int, hidden: int = 64) -> None:
+        super().__init__()
+        self.l1 = nn.Linear(d_in, hidden)
+        self.l2 = nn.Linear(hidden, d_out)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.l2(torch.relu(self.l1(x)))
+
+    def export(self, name: str, normalize: bool) -> FeatureDecoder:
+        """As a numpy `FeatureDecoder` (weights [in, out])."""
+        return FeatureDecoder(name, [self.l1.weight.detach().numpy().T.copy(), self.l2.weight.detach().numpy().T.copy()],
+                              [self.l1.bias.detach().numpy().copy(), self.l2.bias.detach().numpy().copy()], normalize)
+
+
+@dataclass(frozen=True)
+class FeatureConfig:
+    """Feature-field distillation settings.
+
+    Attributes:
+        dim: D, the latent width per Gaussian.
+        iterations: distillation steps (one frame each).
+        lr_features, lr_decoders: learning rates.
+        hidden: decoder hidden width.
+        encoders: which offline encoders ("semantic", "color"); `clip_path` adds a CLIP-style one.
+        clip_path: local directory of a CLIP model, or None.
+        backend: renderer.
+        progress: tqdm bar.
+    """
+
+    dim: int = 32
+    iterations: int = 300
+    lr_features: float = 1e-2
+    lr_decoders: float = 3e-3
+    hidden: int = 64
+    encoders: tuple[str, ...] = ("semantic", "color")
+    clip_path: str | None = None
+    backend: str = "cpu"
+    progress: bool = True
+
+
+def _encoders(cfg: FeatureConfig) -> list:
+    out = []
+    for name in cfg.encoders:
+        if name == "semantic":
+            out.append(LabelEmbeddingEncoder())
+        elif name == "color":
+            out.append(ColorEncoder())
+        else:
+            raise ValueError(f"Expected encoders among ('semantic', 'color'), found {name!r}")
+    if cfg.clip_path:
+        out.append(ClipImageEncoder(cfg.clip_path))
+    return out
+
+
+def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: FeatureConfig | None = None,
+                     seed: int = 0, encoders: Sequence[PixelEncoder] | None = None) -> tuple[dict[str, FeatureDecoder], dict]:
+    """Learn per-Gaussian latents (set as `model.features`) and one decoder per encoder, with the
+    geometry and motion frozen. Returns (decoders, log)."""
+    cfg = config or FeatureConfig()
+    encs = list(encoders) if encoders is not None else _encoders(cfg)
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    T, H, W = clip.num_frames, clip.height, clip.width
+    # latent init: one random code per instance (from the masks each Gaussian was lifted from) plus noise,
+    # so Gaussians that no view ever shows still decode like their instance
+    ids = model.object_ids.numpy()
+    codes = {int(i): rng.normal(size=cfg.dim) for i in np.unique(ids)}
+    init = np.stack([codes[int(i)] for i in ids]) + 0.05 * rng.normal(size=(len(ids), cfg.dim))
+    model.features = nn.Parameter(torch.as_tensor(init, dtype=torch.float32))
+    decoders = nn.ModuleList([MLP(cfg.dim, e.dim, cfg.hidden) for e in encs])
+    opt = torch.optim.Adam([{"params": [model.features], "lr": cfg.lr_features},
+                            {"params": decoders.parameters(), "lr": cfg.lr_decoders}])
+    targets = {}
+    start = time.perf_counter()
+    viewmats = torch.from_numpy(np.stack([c.world_to_camera for c in clip.cameras]).astype(np.float32))
+    Ks = torch.from_numpy(np.stack([c.K for c in clip.cameras]).astype(np.float32))
+    nears = torch.tensor([c.near for c in clip.cameras], dtype=torch.float64)
+    with torch.no_grad():
+        scales, opac, colors = model.scales().detach(), model.opacities().detach(), model.colors().detach()
+    order: list[int] = []
+    losses = []
+    bar = tqdm(range(cfg.iterations), desc="feature field", disable=not cfg.progress, leave=False)
+    for it in bar:
+        if not order:
+            order = list(rng.permutation(T))
+        t = int(order.pop())
+        if t not in targets:
+            targets[t] = [tuple(torch.from_numpy(a) for a in e.encode(clip, t)) for e in encs]
+        with torch.no_grad():
+            means, quats = model.warp(t)
+        out = rasterize(means.detach(), quats.detach(), scales, opac, colors, viewmats[t:t + 1], Ks[t:t + 1], W, H,
+                        features=model.features, nears=nears[t:t + 1], backend=cfg.backend)
+        fmap = out["features"][0]                                               # [H, W, D]
+        alpha = out["alpha"][0].detach()
+        loss = fmap.sum() * 0.0
+        for dec, (target, valid) in zip(decoders, targets[t]):
+            sel = valid & (alpha > 0.5)
+            if sel.any():
+                pred = dec(fmap[sel] / alpha[sel][:, None])                    # alpha-normalised pixel feature
+                loss = loss + ((pred - target[sel]) ** 2).mean()
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        if it % 25 == 0:
+            losses.append(float(loss))
+            bar.set_postfix(loss=f"{float(loss):.4f}")
+    exported = {e.name: dec.export(e.name, e.normalize) for e, dec in zip(encs, decoders)}
+    return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations}
+
