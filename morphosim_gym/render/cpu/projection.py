@@ -22,19 +22,22 @@ __all__ = ["project_forward", "project_backward"]
 _BLOCK = 512  # Gaussians projected before their tile counts are taken (keeps the block in L1)
 
 
+# Fields of the per-block scratch (structure of arrays, one flat buffer, constant offsets so
+# that LLVM sees a single base pointer and vectorises the projection without alias checks).
+_IN_M0, _IN_M1, _IN_M2, _IN_QW, _IN_QX, _IN_QY, _IN_QZ, _IN_S0, _IN_S1, _IN_S2, _IN_OP = range(11)
+(_OUT_MX, _OUT_MY, _OUT_CA, _OUT_CB, _OUT_CC, _OUT_Z, _OUT_EX, _OUT_EY,
+ _OUT_X0, _OUT_X1, _OUT_Y0, _OUT_Y1) = range(11, 23)
+_NFIELD = 23
+
+
 @jit
-def _project_block(lo, hi,
-                   means,       # [N, 3]
-                   quats,       # [N, 4]
-                   scales,      # [N, 3]
-                   opacities,   # [N]
-                   colors,      # [N, 3]
-                   viewmat,     # [4, 4]
-                   K,           # [3, 3]
-                   width, height, near,
-                   rec,         # [N, 16] out
-                   trect):      # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
-    F = rec.dtype.type
+def _project_soa(n,
+                 buf,       # [_NFIELD * _BLOCK] block scratch: inputs in, outputs out
+                 viewmat,   # [4, 4]
+                 K,         # [3, 3]
+                 width, height, near):
+    """Branch-free projection of n <= _BLOCK Gaussians held field by field in `buf`."""
+    F = buf.dtype.type
     fx = K[0, 0]
     fy = K[1, 1]
     cx = K[0, 2]
@@ -54,42 +57,45 @@ def _project_block(lo, hi,
     one = F(1.0)
     zero = F(0.0)
     half = F(0.5)
+    two = F(2.0)
     blur = F(BLUR)
     amin = F(ALPHA_MIN)
     margin = F(EXTENT_MARGIN)
     inf = F(np.inf)
-    for i in range(lo, hi):
+    B = np.uint64(_BLOCK)
+    for jj in range(n):
+        j = np.uint64(jj)
         # camera space
-        m0 = means[i, 0]
-        m1 = means[i, 1]
-        m2 = means[i, 2]
+        m0 = buf[np.uint64(_IN_M0) * B + j]
+        m1 = buf[np.uint64(_IN_M1) * B + j]
+        m2 = buf[np.uint64(_IN_M2) * B + j]
         x = r00 * m0 + r01 * m1 + r02 * m2 + t0
         y = r10 * m0 + r11 * m1 + r12 * m2 + t1
         z = r20 * m0 + r21 * m1 + r22 * m2 + t2
         zok = z > near
         zs = z if zok else one
         # rotation of the normalised quaternion, times the scales (M = R S)
-        qw = quats[i, 0]
-        qx = quats[i, 1]
-        qy = quats[i, 2]
-        qz = quats[i, 3]
+        qw = buf[np.uint64(_IN_QW) * B + j]
+        qx = buf[np.uint64(_IN_QX) * B + j]
+        qy = buf[np.uint64(_IN_QY) * B + j]
+        qz = buf[np.uint64(_IN_QZ) * B + j]
         qn = one / np.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
         qw *= qn
         qx *= qn
         qy *= qn
         qz *= qn
-        s0 = scales[i, 0]
-        s1 = scales[i, 1]
-        s2 = scales[i, 2]
-        m00 = (one - F(2.0) * (qy * qy + qz * qz)) * s0
-        m01 = F(2.0) * (qx * qy - qw * qz) * s1
-        m02 = F(2.0) * (qx * qz + qw * qy) * s2
-        m10 = F(2.0) * (qx * qy + qw * qz) * s0
-        m11 = (one - F(2.0) * (qx * qx + qz * qz)) * s1
-        m12 = F(2.0) * (qy * qz - qw * qx) * s2
-        m20 = F(2.0) * (qx * qz - qw * qy) * s0
-        m21 = F(2.0) * (qy * qz + qw * qx) * s1
-        m22 = (one - F(2.0) * (qx * qx + qy * qy)) * s2
+        s0 = buf[np.uint64(_IN_S0) * B + j]
+        s1 = buf[np.uint64(_IN_S1) * B + j]
+        s2 = buf[np.uint64(_IN_S2) * B + j]
+        m00 = (one - two * (qy * qy + qz * qz)) * s0
+        m01 = two * (qx * qy - qw * qz) * s1
+        m02 = two * (qx * qz + qw * qy) * s2
+        m10 = two * (qx * qy + qw * qz) * s0
+        m11 = (one - two * (qx * qx + qz * qz)) * s1
+        m12 = two * (qy * qz - qw * qx) * s2
+        m20 = two * (qx * qz - qw * qy) * s0
+        m21 = two * (qy * qz + qw * qx) * s1
+        m22 = (one - two * (qx * qx + qy * qy)) * s2
         # W = R_cam M, so cov_cam = W W^T
         w00 = r00 * m00 + r01 * m10 + r02 * m20
         w01 = r00 * m01 + r01 * m11 + r02 * m21
@@ -100,7 +106,7 @@ def _project_block(lo, hi,
         w20 = r20 * m00 + r21 * m10 + r22 * m20
         w21 = r20 * m01 + r21 * m11 + r22 * m21
         w22 = r20 * m02 + r21 * m12 + r22 * m22
-        # EWA Jacobian at the clamped direction
+        # EWA Jacobian at the clamped direction: T = J W, cov2d = T T^T
         iz = one / zs
         u = min(max(x * iz, -lim_x_neg), lim_x_pos)
         v = min(max(y * iz, -lim_y_neg), lim_y_pos)
@@ -119,15 +125,15 @@ def _project_block(lo, hi,
         cc = b0 * b0 + b1 * b1 + b2 * b2 + blur
         det = ca * cc - cb * cb
         idet = one / det
-        mx = fx * x * iz + cx
-        my = fy * y * iz + cy
-        op = opacities[i]
-        level = F(2.0) * splat_log(max(F(255.0) * op, one))
-        ex = np.sqrt(level * ca) + margin
-        ey = np.sqrt(level * cc) + margin
         ica = cc * idet
         icb = -cb * idet
         icc = ca * idet
+        mx = fx * x * iz + cx
+        my = fy * y * iz + cy
+        op = buf[np.uint64(_IN_OP) * B + j]
+        level = two * splat_log(max(F(255.0) * op, one))
+        ex = np.sqrt(level * ca) + margin
+        ey = np.sqrt(level * cc) + margin
         # culled: behind the near plane, too transparent, degenerate or non-finite footprint
         # (NaN fails every comparison, so it is culled too)
         ok = zok & (op >= amin) & (det > zero) & (abs(ica) < inf) & (abs(icb) < inf) & (abs(icc) < inf)
@@ -138,22 +144,67 @@ def _project_block(lo, hi,
         by0 = min(max(np.ceil(my - ey - half), zero), Hf)
         by1 = max(min(np.floor(my + ey - half), Hf - one), -one)
         ok = ok & (bx0 <= bx1) & (by0 <= by1)
-        bx0 = bx0 if ok else zero
-        bx1 = bx1 if ok else -one
-        by0 = by0 if ok else zero
-        by1 = by1 if ok else -one
-        rec[i, R_MX] = mx
-        rec[i, R_MY] = my
-        rec[i, R_CA] = ica
-        rec[i, R_CB] = icb
-        rec[i, R_CC] = icc
-        rec[i, R_OP] = op
-        rec[i, R_Z] = z
+        buf[np.uint64(_OUT_MX) * B + j] = mx
+        buf[np.uint64(_OUT_MY) * B + j] = my
+        buf[np.uint64(_OUT_CA) * B + j] = ica
+        buf[np.uint64(_OUT_CB) * B + j] = icb
+        buf[np.uint64(_OUT_CC) * B + j] = icc
+        buf[np.uint64(_OUT_Z) * B + j] = z
+        buf[np.uint64(_OUT_EX) * B + j] = ex
+        buf[np.uint64(_OUT_EY) * B + j] = ey
+        buf[np.uint64(_OUT_X0) * B + j] = bx0 if ok else zero
+        buf[np.uint64(_OUT_X1) * B + j] = bx1 if ok else -one
+        buf[np.uint64(_OUT_Y0) * B + j] = by0 if ok else zero
+        buf[np.uint64(_OUT_Y1) * B + j] = by1 if ok else -one
+
+
+@jit
+def _project_block(lo, hi,
+                   means,       # [N, 3]
+                   quats,       # [N, 4]
+                   scales,      # [N, 3]
+                   opacities,   # [N]
+                   colors,      # [N, 3]
+                   viewmat,     # [4, 4]
+                   K,           # [3, 3]
+                   width, height, near,
+                   buf,         # [_NFIELD * _BLOCK] scratch
+                   rec,         # [N, 16] out
+                   trect):      # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
+    n = hi - lo
+    B = _BLOCK
+    for j in range(n):
+        i = lo + j
+        buf[_IN_M0 * B + j] = means[i, 0]
+        buf[_IN_M1 * B + j] = means[i, 1]
+        buf[_IN_M2 * B + j] = means[i, 2]
+        buf[_IN_QW * B + j] = quats[i, 0]
+        buf[_IN_QX * B + j] = quats[i, 1]
+        buf[_IN_QY * B + j] = quats[i, 2]
+        buf[_IN_QZ * B + j] = quats[i, 3]
+        buf[_IN_S0 * B + j] = scales[i, 0]
+        buf[_IN_S1 * B + j] = scales[i, 1]
+        buf[_IN_S2 * B + j] = scales[i, 2]
+        buf[_IN_OP * B + j] = opacities[i]
+    _project_soa(n, buf, viewmat, K, width, height, near)
+    for j in range(n):
+        i = lo + j
+        rec[i, R_MX] = buf[_OUT_MX * B + j]
+        rec[i, R_MY] = buf[_OUT_MY * B + j]
+        rec[i, R_CA] = buf[_OUT_CA * B + j]
+        rec[i, R_CB] = buf[_OUT_CB * B + j]
+        rec[i, R_CC] = buf[_OUT_CC * B + j]
+        rec[i, R_OP] = buf[_IN_OP * B + j]
+        rec[i, R_Z] = buf[_OUT_Z * B + j]
         rec[i, R_R] = colors[i, 0]
         rec[i, R_G] = colors[i, 1]
         rec[i, R_B] = colors[i, 2]
-        rec[i, R_EX] = ex
-        rec[i, R_EY] = ey
+        rec[i, R_EX] = buf[_OUT_EX * B + j]
+        rec[i, R_EY] = buf[_OUT_EY * B + j]
+        bx0 = buf[_OUT_X0 * B + j]
+        bx1 = buf[_OUT_X1 * B + j]
+        by0 = buf[_OUT_Y0 * B + j]
+        by1 = buf[_OUT_Y1 * B + j]
         rec[i, R_X0] = bx0
         rec[i, R_X1] = bx1
         rec[i, R_Y0] = by0
@@ -186,9 +237,11 @@ def _count_block(lo, hi, trect, tiles_x, counts):
 def _project_range(lo, hi, means, quats, scales, opacities, colors, viewmat, K, width, height, near,
                    rec, trect, tiles_x, counts):
     counts[:] = 0
+    buf = np.empty(_NFIELD * _BLOCK, rec.dtype)
     for b in range(lo, hi, _BLOCK):
         e = min(b + _BLOCK, hi)
-        _project_block(b, e, means, quats, scales, opacities, colors, viewmat, K, width, height, near, rec, trect)
+        _project_block(b, e, means, quats, scales, opacities, colors, viewmat, K, width, height, near, buf, rec,
+                       trect)
         _count_block(b, e, trect, tiles_x, counts)
 
 
