@@ -6,4 +6,14 @@
 
 from .pipeline import rasterize_numpy
 
-__all__ = ["rasterize_numpy"]
+
+def __getattr__(name):
+    # `rasterize_cpu` needs torch; import it lazily so the numpy hot path never imports torch
+    if name == "rasterize_cpu":
+        from .autograd import rasterize_cpu
+
+        return rasterize_cpu
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["rasterize_numpy", "rasterize_cpu"]

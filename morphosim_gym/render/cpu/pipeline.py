@@ -23,6 +23,7 @@ from .projection import project_forward
 __all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer"]
 
 _KEY_DTYPE = {np.dtype(np.float32): np.uint32, np.dtype(np.float64): np.uint64}
+_MAX_TILE_LIST = {np.dtype(np.float32): 1 << 24, np.dtype(np.float64): 1 << 53}
 
 
 @dataclass
@@ -92,6 +93,9 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     bin_fill(trect, tiles_x, thread_off, lst)
     assign = np.empty((nthr, ntiles), np.int32)
     nper, max_len = plan_tiles(tile_start, nthr, assign)
+    if max_len >= _MAX_TILE_LIST[dtype]:
+        raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
+                         f"{dtype.name}, found {max_len} (list positions are kept as floats)")
     if timer:
         timer.lap("bin")
     kd = _KEY_DTYPE[dtype]
