@@ -4,7 +4,11 @@
 `rasterize_cpu` is the differentiable torch entry point (float32 or float64).
 """
 
-from .pipeline import rasterize_numpy
+from ._cache import _source_hash, invalidate_stale_cache
+
+invalidate_stale_cache(_source_hash)
+
+from .pipeline import rasterize_numpy  # noqa: E402
 
 
 def __getattr__(name):

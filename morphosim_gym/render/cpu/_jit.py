@@ -22,7 +22,15 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic, overload
 
-from ..reference import ALPHA_MAX, ALPHA_MIN, BLUR, EXTENT_MARGIN, FOV_CLAMP, T_MIN, TILE
+# Twins of the constants of `morphosim_gym.render.reference` (which imports torch; the numpy hot
+# path must not). tests/render checks that both sides agree.
+TILE = 16
+ALPHA_MIN = 1.0 / 255.0
+ALPHA_MAX = 0.99
+T_MIN = 1e-4
+BLUR = 0.3
+FOV_CLAMP = 1.3
+EXTENT_MARGIN = 0.05
 
 __all__ = [
     "jit", "pjit", "splat_exp", "splat_log", "float_bits",
