@@ -1,0 +1,279 @@
+"""Backward rasterisation: gradients of the per-pixel outputs w.r.t. each Gaussian's 2D record.
+
+For one pixel with contributing Gaussians i = 1..n (front to back), alpha_i, transmittance
+T_i = prod_{j<i} (1 - alpha_j), weights w_i = alpha_i T_i and final transmittance T_f:
+
+    rgb = sum w_i c_i + T_f bg,  acc = 1 - T_f,  depth = dsum / acc with dsum = sum w_i z_i,
+    features = sum w_i f_i.
+
+With upstream gradients g_rgb, g_depth, g_alpha, g_feat, let g_dsum = g_depth / acc,
+g_acc = g_alpha - g_depth depth / acc, G_i = g_rgb . c_i + g_dsum z_i + g_feat . f_i and
+Q = sum_j w_j G_j + T_f (g_rgb . bg - g_acc) = g_rgb . rgb + g_dsum dsum + g_feat . features
+- T_f g_acc. Then
+
+    dL/dalpha_i = T_i G_i - (Q - sum_{j<=i} w_j G_j) / (1 - alpha_i),
+
+so the pass runs front to back, like the forward pass (same tile loop, same T recurrence, no
+division to undo transmittance), keeping the running prefix sum per pixel. Gaussians at list
+positions >= the forward pass's `last` for a pixel are skipped there. alpha = min(0.99, o e^p):
+where the clamp is active no gradient reaches o or p. Per Gaussian the pass accumulates
+
+    d mean2d (2), d conic (3), d opacity, d depth (camera z), d colour (3)  [+ d features (D)]
+
+into a per-thread buffer (threads render disjoint tiles; buffers are summed afterwards).
+Reductions over pixels are vectorised, so this module compiles with `reassoc`.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba import prange
+
+from ._jit import (ALPHA_MAX, ALPHA_MIN, R_B, R_CA, R_CB, R_CC, R_G, R_MX, R_MY, R_OP, R_R, R_X0, R_X1, R_Y0,
+                   R_Y1, R_Z, splat_exp)
+
+__all__ = ["raster_backward", "G_MX", "G_MY", "G_CA", "G_CB", "G_CC", "G_OP", "G_Z", "G_R", "G_G", "G_B", "NGRAD"]
+
+# columns of the per-Gaussian 2D gradient buffer
+G_MX, G_MY, G_CA, G_CB, G_CC, G_OP, G_Z, G_R, G_G, G_B = range(10)
+NGRAD = 10
+
+_OPTS = dict(cache=True, error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
+_jit_r = numba.njit(**_OPTS)
+
+# per-pixel state of one tile (flat, constant offsets; see forward.py)
+_S_T = 0
+_S_P = 256      # prefix sum of w_j G_j
+_S_GR = 512     # upstream gradients (rgb, dsum) and Q
+_S_GG = 768
+_S_GB = 1024
+_S_GD = 1280
+_S_Q = 1536
+_S_LAST = 1792  # list position where the pixel stopped, as a float
+_S_W = 2048     # weight of the current Gaussian (feature channels)
+_S_GF = 2304    # g_feat . f of the current Gaussian
+_S_SIZE = 2560
+
+
+@_jit_r
+def _backward_tiles(tiles,        # [n] int32 tiles of this thread
+                    ntiles_mine,
+                    tile_start,   # [n_tiles + 1] int64
+                    lst,          # [n_entries] int32, depth-sorted per tile by the forward pass
+                    rec,          # [N, 16]
+                    feat,         # [N, D]
+                    width, height, tiles_x,
+                    rgb,          # [H, W, 3] forward output
+                    depth,        # [H, W] forward output
+                    feat_out,     # [H, W, D] forward output
+                    tfinal,       # [H, W]
+                    last,         # [H, W] int32
+                    g_rgb,        # [H, W, 3]
+                    g_depth,      # [H, W]
+                    g_alpha,      # [H, W]
+                    g_feat,       # [H, W, D]
+                    grad,         # [N, NGRAD] out (+=), this thread's buffer
+                    grad_feat):   # [N, D] out (+=), this thread's buffer
+    F = rec.dtype.type
+    D = feat.shape[1]
+    S = np.empty(_S_SIZE, F)
+    gfp = np.zeros(max(D, 1) * 256, F)   # g_feat of the tile, channel-major
+    rowbits = np.empty(16, np.int64)
+    order = np.empty(256, np.int64)
+    lastp = np.empty(256, np.int64)
+    one = F(1.0)
+    zero = F(0.0)
+    half = F(0.5)
+    amax = F(ALPHA_MAX)
+    amin = F(ALPHA_MIN)
+    uT = np.uint64(_S_T)
+    uP = np.uint64(_S_P)
+    uGR = np.uint64(_S_GR)
+    uGG = np.uint64(_S_GG)
+    uGB = np.uint64(_S_GB)
+    uGD = np.uint64(_S_GD)
+    uQ = np.uint64(_S_Q)
+    uL = np.uint64(_S_LAST)
+    uW = np.uint64(_S_W)
+    uGF = np.uint64(_S_GF)
+    for q in range(ntiles_mine):
+        tile = tiles[q]
+        start = tile_start[tile]
+        x0 = (tile % tiles_x) * 16
+        y0 = (tile // tiles_x) * 16
+        nx = min(16, width - x0)
+        ny = min(16, height - y0)
+        S[:] = zero
+        kend = 0
+        for p in range(256):
+            lastp[p] = 0
+        for ly in range(ny):
+            for lx in range(nx):
+                p = (ly << 4) + lx
+                yy = y0 + ly
+                xx = x0 + lx
+                Tf = tfinal[yy, xx]
+                acc = one - Tf
+                gd = g_depth[yy, xx]
+                dep = depth[yy, xx]
+                g_dsum = gd / acc if acc > zero else zero
+                g_acc = g_alpha[yy, xx] - (gd * dep / acc if acc > zero else zero)
+                gr = g_rgb[yy, xx, 0]
+                gg = g_rgb[yy, xx, 1]
+                gb = g_rgb[yy, xx, 2]
+                Q = gr * rgb[yy, xx, 0] + gg * rgb[yy, xx, 1] + gb * rgb[yy, xx, 2] + g_dsum * dep * acc - Tf * g_acc
+                for d in range(D):
+                    gfd = g_feat[yy, xx, d]
+                    gfp[d * 256 + p] = gfd
+                    Q += gfd * feat_out[yy, xx, d]
+                S[_S_T + p] = one
+                S[_S_GR + p] = gr
+                S[_S_GG + p] = gg
+                S[_S_GB + p] = gb
+                S[_S_GD + p] = g_dsum
+                S[_S_Q + p] = Q
+                lp = last[yy, xx]
+                S[_S_LAST + p] = F(lp)
+                lastp[p] = lp
+                kend = max(kend, lp)
+        # pixels ordered by their stop position, to clear their active bits as k passes it
+        order[:] = np.argsort(lastp)
+        for ly in range(16):
+            rowbits[ly] = 0
+        nev = 0
+        for p in range(256):
+            if lastp[p] > 0:
+                rowbits[p >> 4] |= 1 << (p & 15)
+            else:
+                nev += 1
+        x0f = F(x0) + half
+        y0f = F(y0) + half
+        for k in range(kend):
+            while nev < 256 and lastp[order[nev]] <= k:
+                p = order[nev]
+                rowbits[p >> 4] &= ~(1 << (p & 15))
+                nev += 1
+            i = lst[start + k]
+            lx0 = max(np.int64(rec[i, R_X0]) - x0, 0)
+            lx1 = min(np.int64(rec[i, R_X1]) - x0, 15)
+            ly0 = max(np.int64(rec[i, R_Y0]) - y0, 0)
+            ly1 = min(np.int64(rec[i, R_Y1]) - y0, 15)
+            colmask = ((2 << lx1) - 1) & ~((1 << lx0) - 1)
+            while ly0 <= ly1 and (rowbits[ly0] & colmask) == 0:
+                ly0 += 1
+            while ly1 >= ly0 and (rowbits[ly1] & colmask) == 0:
+                ly1 -= 1
+            if ly0 > ly1:
+                continue
+            mx = rec[i, R_MX]
+            my = rec[i, R_MY]
+            ca = rec[i, R_CA]
+            cb = rec[i, R_CB]
+            cc = rec[i, R_CC]
+            op = rec[i, R_OP]
+            z = rec[i, R_Z]
+            cr = rec[i, R_R]
+            cg = rec[i, R_G]
+            cbl = rec[i, R_B]
+            kf = F(k)
+            pa = ly0 << 4
+            pb = (ly1 + 1) << 4
+            if D > 0:
+                for pp in range(pa, pb):
+                    S[uGF + np.uint64(pp)] = zero
+                for d in range(D):
+                    fd = feat[i, d]
+                    fb = np.uint64(d * 256)
+                    for pp in range(pa, pb):
+                        p = np.uint64(pp)
+                        S[uGF + p] += gfp[fb + p] * fd
+            g_mx = zero
+            g_my = zero
+            g_ca = zero
+            g_cb = zero
+            g_cc = zero
+            g_op = zero
+            g_z = zero
+            g_r = zero
+            g_g = zero
+            g_b = zero
+            for pp in range(pa, pb):
+                p = np.uint64(pp)
+                pi = np.int32(pp)
+                dx = mx - (x0f + F(pi & np.int32(15)))
+                dy = my - (y0f + F(pi >> np.int32(4)))
+                power = F(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy
+                e = splat_exp(power)
+                aw = op * e
+                al = min(amax, aw)
+                ok = (kf < S[uL + p]) & (al >= amin) & (power <= zero)
+                Tp = S[uT + p]
+                w = al * Tp if ok else zero
+                gR = S[uGR + p]
+                gG = S[uGG + p]
+                gB = S[uGB + p]
+                gD = S[uGD + p]
+                Gv = gR * cr + gG * cg + gB * cbl + gD * z + S[uGF + p]
+                Pold = S[uP + p]
+                Pn = Pold + w * Gv
+                dal = Tp * Gv - (S[uQ + p] - Pn) / (one - al)
+                dal = dal if (ok & (aw <= amax)) else zero
+                dpow = dal * aw
+                g_op += dal * e
+                g_mx -= dpow * (ca * dx + cb * dy)
+                g_my -= dpow * (cc * dy + cb * dx)
+                g_ca -= dpow * half * dx * dx
+                g_cb -= dpow * dx * dy
+                g_cc -= dpow * half * dy * dy
+                g_r += w * gR
+                g_g += w * gG
+                g_b += w * gB
+                g_z += w * gD
+                S[uW + p] = w
+                S[uP + p] = Pn if ok else Pold + zero
+                S[uT + p] = Tp * (one - al) if ok else Tp + zero
+            grad[i, 0] += g_mx
+            grad[i, 1] += g_my
+            grad[i, 2] += g_ca
+            grad[i, 3] += g_cb
+            grad[i, 4] += g_cc
+            grad[i, 5] += g_op
+            grad[i, 6] += g_z
+            grad[i, 7] += g_r
+            grad[i, 8] += g_g
+            grad[i, 9] += g_b
+            for d in range(D):
+                fb = np.uint64(d * 256)
+                s = zero
+                for pp in range(pa, pb):
+                    p = np.uint64(pp)
+                    s += S[uW + p] * gfp[fb + p]
+                grad_feat[i, d] += s
+
+
+@numba.njit(parallel=True, **_OPTS)
+def raster_backward(assign,      # [n_threads, n_tiles] int32
+                    nper,        # [n_threads] int64
+                    tile_start,  # [n_tiles + 1] int64
+                    lst,         # [n_entries] int32
+                    rec,         # [N, 16]
+                    feat,        # [N, D]
+                    width, height, tiles_x,
+                    rgb,         # [H, W, 3]
+                    depth,       # [H, W]
+                    feat_out,    # [H, W, D]
+                    tfinal,      # [H, W]
+                    last,        # [H, W] int32
+                    g_rgb,       # [H, W, 3]
+                    g_depth,     # [H, W]
+                    g_alpha,     # [H, W]
+                    g_feat,      # [H, W, D]
+                    grad,        # [n_threads, N, NGRAD] out (+=)
+                    grad_feat):  # [n_threads, N, D] out (+=)
+    """Per-Gaussian gradients of one camera's outputs w.r.t. its records (see module docstring);
+    thread k handles tiles assign[k, :nper[k]] and accumulates into grad[k], grad_feat[k]."""
+    nthr = assign.shape[0]
+    for k in prange(nthr):
+        _backward_tiles(assign[k], nper[k], tile_start, lst, rec, feat, width, height, tiles_x, rgb, depth,
+                        feat_out, tfinal, last, g_rgb, g_depth, g_alpha, g_feat, grad[k], grad_feat[k])

@@ -1,0 +1,196 @@
+"""Per-camera orchestration of the forward kernels, and `rasterize_numpy` (the env hot path).
+
+One camera = project (parallel) -> bin offsets -> bin fill (parallel) -> plan threads ->
+sort + composite per tile (parallel). `render_camera` runs these stages and returns what the
+backward pass needs (`FrameState`).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Optional
+
+import numba
+import numpy as np
+
+from ._jit import NREC
+from .binning import bin_fill, bin_offsets, plan_tiles
+from .forward import raster_forward
+from .projection import project_forward
+
+__all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer"]
+
+_KEY_DTYPE = {np.dtype(np.float32): np.uint32, np.dtype(np.float64): np.uint64}
+_MAX_TILE_LIST = {np.dtype(np.float32): 1 << 24, np.dtype(np.float64): 1 << 53}
+
+
+@dataclass
+class FrameState:
+    """What one camera's forward pass leaves for its backward pass.
+
+    rec [N, 16] projected records; tile_start [n_tiles + 1] and lst [n_entries] the depth-sorted
+    per-tile lists; assign [n_threads, n_tiles] / nper [n_threads] the thread plan; tfinal [H, W]
+    final transmittance; last [H, W] int32 per-pixel stop position in its tile's list.
+    """
+
+    rec: np.ndarray
+    tile_start: np.ndarray
+    lst: np.ndarray
+    assign: np.ndarray
+    nper: np.ndarray
+    max_len: int
+    tiles_x: int
+    tfinal: Optional[np.ndarray]
+    last: Optional[np.ndarray]
+
+
+class StageTimer:
+    """Accumulates wall time per stage (only when passed to `render_camera`)."""
+
+    def __init__(self) -> None:
+        self.totals: dict[str, float] = {}
+        self._t = 0.0
+
+    def start(self) -> None:
+        self._t = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        t = time.perf_counter()
+        self.totals[name] = self.totals.get(name, 0.0) + (t - self._t)
+        self._t = t
+
+
+def render_camera(means, quats, scales, opacities, colors, feat, ids,
+                  viewmat,   # [4, 4] (float dtype of the Gaussians)
+                  K,         # [3, 3]
+                  near: float, width: int, height: int,
+                  bg,        # [3]
+                  rgb, depth, alpha, inst, feat_out,   # output views for this camera
+                  save: bool = False, timer: Optional[StageTimer] = None) -> Optional[FrameState]:
+    """Render one camera into the given output views; with `save`, return the backward state."""
+    dtype = means.dtype
+    F = dtype.type
+    n = means.shape[0]
+    nthr = numba.get_num_threads()
+    tiles_x = (width + 15) // 16
+    tiles_y = (height + 15) // 16
+    ntiles = tiles_x * tiles_y
+    if timer:
+        timer.start()
+    rec = np.empty((n, NREC), dtype)
+    trect = np.empty((4, n), np.int32)
+    counts = np.empty((nthr, ntiles), np.int32)
+    project_forward(means, quats, scales, opacities, colors, viewmat, K, width, height, F(near),
+                    rec, trect, tiles_x, counts)
+    if timer:
+        timer.lap("project")
+    tile_start = np.empty(ntiles + 1, np.int64)
+    thread_off = np.empty((nthr, ntiles), np.int64)
+    total = bin_offsets(counts, tile_start, thread_off)
+    lst = np.empty(total, np.int32)
+    bin_fill(trect, tiles_x, thread_off, lst)
+    assign = np.empty((nthr, ntiles), np.int32)
+    nper, max_len = plan_tiles(tile_start, nthr, assign)
+    if max_len >= _MAX_TILE_LIST[dtype]:
+        raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
+                         f"{dtype.name}, found {max_len} (list positions are kept as floats)")
+    if timer:
+        timer.lap("bin")
+    kd = _KEY_DTYPE[dtype]
+    m = max(int(max_len), 1)
+    keys = np.empty((nthr, m), kd)
+    keys2 = np.empty((nthr, m), kd)
+    idx = np.empty((nthr, m), np.int32)
+    idx2 = np.empty((nthr, m), np.int32)
+    if save:
+        tfinal = np.empty((height, width), dtype)
+        last = np.empty((height, width), np.int32)
+    else:
+        tfinal = _DUMMY_F[dtype]
+        last = _DUMMY_I
+    raster_forward(assign, nper, tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
+                   rgb, depth, alpha, inst, feat_out, tfinal, last, save, keys, keys2, idx, idx2)
+    if timer:
+        timer.lap("raster")
+    if not save:
+        return None
+    return FrameState(rec, tile_start, lst, assign, nper, int(max_len), tiles_x, tfinal, last)
+
+
+_DUMMY_F = {np.dtype(np.float32): np.empty((1, 1), np.float32), np.dtype(np.float64): np.empty((1, 1), np.float64)}
+_DUMMY_I = np.empty((1, 1), np.int32)
+
+
+def _f32(x, shape_tail, name):
+    a = np.ascontiguousarray(x, dtype=np.float32)
+    if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
+        raise ValueError(f"Expected {name} of shape (N, {', '.join(map(str, shape_tail))}), found {a.shape}")
+    return a
+
+
+def rasterize_numpy(means,        # [N, 3]
+                    quats,        # [N, 4]
+                    scales,       # [N, 3]
+                    opacities,    # [N]
+                    colors,       # [N, 3]
+                    viewmats,     # [C, 4, 4]
+                    Ks,           # [C, 3, 3]
+                    width: int,
+                    height: int,
+                    features=None,    # [N, D]
+                    object_ids=None,  # [N]
+                    background=None,  # [3]
+                    nears=None,       # [C]
+                    timer: Optional[StageTimer] = None) -> dict:
+    """Forward-only float32 splatting of numpy arrays into C cameras (the env observation path).
+
+    Args:
+        means: [N, 3]. quats: [N, 4] w, x, y, z, any norm. scales: [N, 3] standard deviations.
+        opacities: [N]. colors: [N, 3]. viewmats: [C, 4, 4] world->camera (OpenCV axes).
+        Ks: [C, 3, 3]. width, height: pixels. features: [N, D] or None. object_ids: [N] int or
+        None (instance -1 everywhere). background: [3] or None (black). nears: [C] or None (0.01).
+        timer: optional `StageTimer` collecting per-stage wall time.
+
+    Returns:
+        dict of numpy arrays: `rgb` [C, H, W, 3] float32, `depth` [C, H, W] float32, `alpha`
+        [C, H, W] float32, `instance` [C, H, W] int32, `features` [C, H, W, D] float32 or None.
+
+    Examples:
+        >>> out = rasterize_numpy(means, quats, scales, opacities, colors, viewmats, Ks, 64, 48)  # doctest: +SKIP
+        >>> out["rgb"].shape, out["instance"].dtype  # doctest: +SKIP
+        ((1, 48, 64, 3), dtype('int32'))
+    """
+    means = _f32(means, (3,), "means")
+    n = means.shape[0]
+    quats = _f32(quats, (4,), "quats")
+    scales = _f32(scales, (3,), "scales")
+    opacities = np.ascontiguousarray(opacities, dtype=np.float32).reshape(n)
+    colors = _f32(colors, (3,), "colors")
+    viewmats = np.asarray(viewmats, dtype=np.float32).reshape(-1, 4, 4)
+    C = viewmats.shape[0]
+    Ks = np.asarray(Ks, dtype=np.float32).reshape(C, 3, 3)
+    width = int(width)
+    height = int(height)
+    if features is None:
+        feat = np.empty((n, 0), np.float32)
+    else:
+        feat = np.ascontiguousarray(features, dtype=np.float32).reshape(n, -1)
+    D = feat.shape[1]
+    if object_ids is None:
+        ids = np.full(n, -1, np.int32)
+    else:
+        ids = np.ascontiguousarray(object_ids, dtype=np.int32).reshape(n)
+    bg = np.zeros(3, np.float32) if background is None else np.asarray(background, dtype=np.float32).reshape(3)
+    near = np.full(C, 0.01) if nears is None else np.asarray(nears, dtype=np.float64).reshape(C)
+    rgb = np.empty((C, height, width, 3), np.float32)
+    depth = np.empty((C, height, width), np.float32)
+    alpha = np.empty((C, height, width), np.float32)
+    inst = np.empty((C, height, width), np.int32)
+    fout = np.empty((C, height, width, D), np.float32)
+    for c in range(C):
+        render_camera(means, quats, scales, opacities, colors, feat, ids, viewmats[c], Ks[c], float(near[c]),
+                      width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer)
+    return {"rgb": rgb, "depth": depth, "alpha": alpha, "instance": inst,
+            "features": fout if features is not None else None}

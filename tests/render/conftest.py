@@ -1,0 +1,1 @@
+"""Fixtures for the renderer tests (builders live in helpers.py)."""
