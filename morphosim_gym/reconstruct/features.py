@@ -243,8 +243,8 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
         loss.backward()
         opt.step()
         if it % 25 == 0:
-            losses.append(float(loss))
-            bar.set_postfix(loss=f"{float(loss):.4f}")
+            losses.append(loss.item())
+            bar.set_postfix(loss=f"{loss.item():.4f}")
     exported = {e.name: dec.export(e.name, e.normalize) for e, dec in zip(encs, decoders)}
     return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations}
 

@@ -221,9 +221,9 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
             onehot = onehot_features()
         if it % 25 == 0 or it == cfg.iterations - 1:
             p = psnr_torch(rgb.detach().clamp(0, 1), target)
-            log["loss"].append(float(loss))
+            log["loss"].append(loss.item())
             log["psnr"].append(p)
-            bar.set_postfix(loss=f"{float(loss):.4f}", psnr=f"{p:.2f}", n=model.num)
+            bar.set_postfix(loss=f"{loss.item():.4f}", psnr=f"{p:.2f}", n=model.num)
     log["seconds"] = time.perf_counter() - start
     log["iterations"] = cfg.iterations
     return log
