@@ -67,8 +67,8 @@ def build_scene(seed: int = 0) -> ms.Scene4D:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out")
-    ap.add_argument("--size", type=int, default=48)
-    ap.add_argument("--backend", default="torch", choices=["cpu", "torch"])
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--backend", default="cpu", choices=["cpu", "torch"])
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
