@@ -944,6 +944,12 @@ class _RuleParser:
                 pred.unknown.append(toks[i])
                 i += 1
                 continue
+            if subjects and all(np_.kind == "unknown" and np_.det is None and np_.count is None
+                                for np_ in subjects) and not (pred.verbs or pred.dirs or pred.from_side
+                                                              or pred.to_side or pred.settings or pred.path):
+                # unknown words with no article and nothing else understood: not a description
+                i = max(j, i + 1)
+                continue
             if i < n and subjects:
                 _agreement(subjects, toks, i)
             if not subjects and not self.salience and pred.has_motion():
