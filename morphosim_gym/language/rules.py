@@ -283,7 +283,8 @@ def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:
         col = match_color(toks, j)
         if col is not None:
             after = toks[j + col[2]] if j + col[2] < n else None
-            if after is not None and (not _stop_word(after) or (after == "," and not edit)) and after != "'s":
+            if after is not None and (not _stop_word(after) or (after == "," and not edit) or noun_to_category(after)
+                                      or (word_to_setting(after) and np_.det is not None)) and after != "'s":
                 np_.color = np_.color or (col[0], col[1])  # "tomato red": the first colour names it
                 collected.extend(range(j, j + col[2]))
                 j += col[2]
@@ -293,8 +294,11 @@ def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:
         if w in INTENSIFIERS and j + 1 < n and (toks[j + 1] in _SPEED_WORDS_1 or " ".join(toks[j:j + 2]) in SIZE_WORDS):
             pass  # "very small" / "very fast": let the phrase tables below see both words
         elif _stop_word(w) and not (w in _SPEED_WORDS_1 and j + 1 < n and not _stop_word(toks[j + 1])) and not (
-                not collected and np_.det is not None and (word_to_setting(w) or noun_to_category(w))):
-            break  # (after a determiner, "the park" is a place, not the verb "park")
+                (word_to_setting(w) or noun_to_category(w)) and (
+                    (not collected and np_.det is not None)
+                    or (collected and (j + 1 >= n or toks[j + 1] in VERBS or toks[j + 1] in AUX)))):
+            # nouns that are also verbs: "the park", "a yellow taxi speeds"
+            break
         sz = _match_phrase(toks, j, _SIZE_PHRASES)
         if sz is not None and j + sz[1] < n and (not _stop_word(toks[j + sz[1]]) or toks[j + sz[1]] == ","):
             np_.size = sz[0]
@@ -708,8 +712,13 @@ class _PhraseScanner:
         w = toks[i]
         j = i
         factor: float | None = None
-        if w in ("twice", "double") and j + 2 < end and toks[j + 1] == "as" and toks[j + 2] in ("fast", "quickly",
-                                                                                              "quick", "rapidly"):
+        if w in ("minus", "negative") and j + 1 < end and (_is_number(toks[j + 1]) or toks[j + 1] in NUMBER_WORDS):
+            raise CommandError(f"Could not use a negative speed factor in {' '.join(toks[i:end])!r}: the factor "
+                               f"must be > 0 (say 'reverse' to reverse a motion)")
+        if w in ("twice", "double") and j + 2 < end and toks[j + 1] == "as" and toks[j + 2] in ("slow", "slowly"):
+            factor, j = 0.5, j + 3  # "twice as slowly"
+        elif w in ("twice", "double") and j + 2 < end and toks[j + 1] == "as" and toks[j + 2] in (
+                "fast", "quickly", "quick", "rapidly"):
             factor, j = 2.0, j + 3
         elif w == "half" and j + 2 < end and toks[j + 1] == "as" and toks[j + 2] in ("fast", "quickly", "quick"):
             factor, j = 0.5, j + 3
@@ -1122,8 +1131,8 @@ class _RuleParser:
             np_ = cam["target_np"]
             if np_.kind == "setting" or np_.head == "table":
                 self.settings.append(np_.category if np_.kind == "setting" else "table")
-            elif np_.kind in ("category", "unknown") and generate:
-                target = self._landmark(np_)
+            elif np_.kind in ("category", "unknown", "pronoun") and generate:
+                target = self._landmark(np_)  # "the camera orbits it": the last subject
             elif np_.kind in ("category", "unknown"):
                 target = np_
         for s in cam.get("settings", []):
@@ -1662,7 +1671,7 @@ def _read_camera(toks: Sequence[str]) -> dict:
                     break
                 j += 1
             np_ = _parse_np(words, j) if j < n else None
-            if np_ is not None and np_.kind in ("category", "unknown", "setting"):
+            if np_ is not None and np_.kind in ("category", "unknown", "setting", "pronoun"):
                 target_np = np_
                 i = np_.end
                 continue
