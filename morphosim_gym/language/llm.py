@@ -32,7 +32,7 @@ from typing import Any, Mapping
 
 from ..errors import BackendUnavailableError, CommandError
 from .grounding import ALL_WORDS, ground_noun, resolve_in_scene, scene_items
-from .plan import CAMERA_DIRECTIONS, EDIT_OPS, PATHS, RECOLOR_MODES, Plan, Target
+from .plan import CAMERA_DIRECTIONS, EDIT_OPS, PATHS, RECOLOR_MODES, Plan
 from .rules import EXAMPLES, parse_rules
 from .vocabulary import CATEGORIES, SETTINGS
 

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 from ..errors import CommandError
-from .colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, is_color_word, match_color
+from .colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
 from .grounding import (ALL_WORDS, CAMERA_WORDS, SceneItem, ground_noun, ground_noun_vocabulary,
                         resolve_in_scene, scene_items)
 from .lexicon import (AUX, CLOCKWISE_WORDS, COLLECTIVE_NOUNS, DIRECTION_WORDS, DIRECTIONS, FAR_WORDS, NUMBER_WORDS,
@@ -110,7 +110,7 @@ DETS = {"a", "an", "the", "this", "that", "these", "those", "another", "its", "t
 PREPS = {"from", "to", "toward", "into", "onto", "through", "across", "along", "over", "on", "in", "inside",
          "within", "under", "beneath", "below", "above", "by", "near", "beside", "behind", "past", "between",
          "among", "around", "round", "at", "with", "upon", "atop", "alongside", "throughout", "via", "against",
-         "off", "out", "for", "without", "underneath", "amid", "amongst", "across", "beyond", "towards"}
+         "off", "out", "for", "without", "underneath", "amid", "amongst", "beyond", "towards"}
 LOCATIVE_PREPS = {"through", "across", "along", "over", "on", "in", "inside", "within", "under", "beneath", "below",
                   "above", "by", "near", "beside", "behind", "past", "between", "among", "at", "upon", "atop",
                   "alongside", "throughout", "via", "underneath", "amid", "amongst", "beyond", "against", "off"}
@@ -126,7 +126,7 @@ EDIT_VERBS = {"make", "turn", "paint", "color", "recolor", "recolour", "dye", "t
               "freeze", "pause", "speed", "slow", "accelerate", "decelerate", "double", "halve", "triple",
               "quadruple", "darken", "brighten", "lighten", "dim", "orbit", "circle", "rotate", "pan", "zoom",
               "dolly", "let", "have", "give", "add", "increase", "decrease", "reduce", "hide", "drop", "bounce",
-              "zigzag", "go", "drive", "fly", "roll", "run", "swim", "sail", "steer", "head", "apply", "whiten",
+              "zigzag", "go", "drive", "fly", "roll", "run", "swim", "sail", "head", "apply", "whiten",
               "blacken", "redden", "recolorize", "colorize", "wipe"}
 # Edit verbs that end a noun phrase ("make the sedan reverse"); common adjectives such as "clear" or
 # "single" are left out so that "crystal-clear waters" stays one phrase.
@@ -141,7 +141,7 @@ SPATIAL_NOUNS = {"edge", "edges", "side", "sides", "end", "center", "centre", "m
                  "destination", "start", "origin", "point", "frame", "screen", "scene", "picture", "image",
                  "view", "world", "sunlight", "sun", "light", "air", "waves", "current", "wind", "dark", "night",
                  "day", "morning", "evening", "sunset", "sunrise", "weather", "rain", "fog", "mist", "shadow",
-                 "shadows", "lane", "path", "trail", "course", "route", "pace", "speed", "motion", "manner"}
+                 "shadows", "lane", "trail", "course", "route", "pace", "speed", "motion", "manner"}
 _PREAMBLE_1 = {"please", "now", "and", "also", "then", "next", "finally", "so", "ok", "okay", "just", "kindly",
                "afterward", "after", "later", "lastly", "additionally", "first", "second", "third"}
 _PREAMBLE_N = [("can", "you"), ("could", "you"), ("would", "you"), ("will", "you"), ("i", "want", "you", "to"),
@@ -348,8 +348,6 @@ def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:
         np_.kind = "all"
     elif hit is not None and (word_to_setting(head) is None or head == "table" or head in CATEGORIES):
         np_.kind, np_.category, np_.plural = "category", hit[0], hit[1]
-        if head == "table" and False:
-            pass
     elif word_to_setting(head) is not None:
         np_.kind, np_.category = "setting", word_to_setting(head)
     elif head in ("object", "objects", "thing", "things", "item", "items", "everything", "stuff"):
@@ -454,7 +452,7 @@ class _PhraseScanner:
                 i += k
                 continue
             sp = _match_phrase(toks[:end], i, SPEED_PHRASES)
-            if sp is not None and not (w in ("slow", "fast", "quick") and self.edit and False):
+            if sp is not None:
                 pred.speed, pred.speed_word = sp[0], " ".join(toks[i:i + sp[1]])
                 i += sp[1]
                 continue
@@ -513,8 +511,6 @@ class _PhraseScanner:
                         pred.oscillate = True
                         i = j + (1 if toks[j] == "fro" else 2)
                         continue
-                if w == "to" and nxt == "the" and i + 2 < end and toks[i + 2] in ("camera", "viewer") and False:
-                    pass
                 side = _side_at(toks[:end], j)
                 if side is not None and w in ("to", "toward", "until", "reaching"):
                     if pred.to_side is not None and pred.from_side is None:
@@ -881,6 +877,7 @@ class _RuleParser:
         self.settings: list[str] = []
         self.salience: list[str] = []  # object names, most recent last
         self.scene_salience: list[list[SceneItem]] = []
+        self._last_ground: dict[str, str] = {}  # edit target noun -> grounded category (no scene)
         self.generated = False
 
     # ---- entry -------------------------------------------------------------------------------------
@@ -1141,7 +1138,6 @@ class _RuleParser:
                           speed_word=cam.get("speed_word"), target=target if isinstance(target, str) else None)
         if generate:
             self.camera = spec
-        self._camera_target_np = target if not isinstance(target, str) else None
         return spec
 
     # ---- edits -------------------------------------------------------------------------------------------
@@ -1231,11 +1227,7 @@ class _RuleParser:
         self.scene_salience.append(hits)
         cat = None if noun == "*" else (hits[0].category if len({h.category for h in hits}) == 1 else None)
         return Target(text=t.text, noun=noun, category=cat, objects=tuple(h.name for h in hits),
-                      object_ids=(), color=ColorSpec(*t.color) if t.color else None).__class__(
-            text=t.text, noun=noun, category=cat, objects=tuple(h.name for h in hits),
-            object_ids=tuple(h.id for h in hits), color=ColorSpec(*t.color) if t.color else None)
-
-    _last_ground: dict
+                      object_ids=tuple(h.id for h in hits), color=ColorSpec(*t.color) if t.color else None)
 
     def _resolve_in_plan(self, t: _TargetDraft, toks: list[str]) -> Target:
         if t.kind == "pronoun":
@@ -1298,7 +1290,6 @@ class _RuleParser:
                     camera=self.camera or CameraSpec(), setting=setting, setting_source=source, then=then)
 
 
-_RuleParser._last_ground = {}  # replaced per instance in parse_rules
 
 
 def _target_from_hits(text: str, noun: str, hits: list[SceneItem]) -> Target:
@@ -1461,7 +1452,7 @@ def _split_segments(toks: list[str]) -> list[list[str]]:
         brk = 0
         if w in _SEG_PUNCT:
             brk = 1
-        elif w == "then" and cur and not (cur[-1] in ("and",) and False):
+        elif w == "then" and cur:
             brk = 1
         elif w in ("afterward", "finally", "lastly", "subsequently") and cur:
             brk = 1
@@ -1648,13 +1639,12 @@ def _read_camera(toks: Sequence[str]) -> dict:
     direction = None
     target_np = None
     settings: list[str] = []
-    pred = _Pred()
     i = 0
     n = len(words)
     while i < n:
         w = words[i]
         sp = _match_phrase(words, i, SPEED_PHRASES)
-        if sp is not None and not (w in ("fast", "slow") and False):
+        if sp is not None:
             out["speed"], out["speed_word"] = sp[0], " ".join(words[i:i + sp[1]])
             i += sp[1]
             continue
@@ -1814,11 +1804,7 @@ class _EditReader:
                 j = i + 1
                 while j < len(toks) and toks[j] in ("and", ",", "also", "then", "please"):
                     j += 1
-                if j < len(toks) and toks[j] in EDIT_VERBS and toks[j] not in ("show",) and not (
-                        toks[j] in ("move", "go", "run", "drive", "fly", "roll", "swim", "sail", "head", "bounce",
-                                    "zigzag", "circle", "stop", "slow", "speed") and cur and cur[0] in ("make", "let",
-                                                                                                        "have")
-                        and toks[j - 1] == "and" and False):
+                if j < len(toks) and toks[j] in EDIT_VERBS and toks[j] not in ("show",):
                     # "make it stop and ..." keeps going; "... and delete the car" starts a new op
                     if not (cur[0] in ("make", "let", "have") and toks[j] in ("move", "go", "stop", "bounce", "run",
                                                                               "fly", "drive", "swim", "roll")
@@ -2155,9 +2141,6 @@ class _EditReader:
             if rest and rest[0] in ("and",):
                 rest = []
             if rest:
-                extra = match_color(rest, 0)
-                if extra is not None and rest[extra[2]:] == [] and False:
-                    pass
                 if any(x in ("tint", "tinge", "hue") for x in core):
                     return self._additive(targets, col, 0.3 * amount_mult)
                 return None
@@ -2398,6 +2381,4 @@ def parse_rules(text: str, scene: Any = None, require_scene: bool = False) -> Pl
         raise CommandError("Could not understand an empty command. Try e.g. " + ", ".join(EXAMPLES))
     if len(text) > MAX_TEXT_CHARS:
         raise CommandError(f"Could not parse a command of {len(text)} characters: at most {MAX_TEXT_CHARS}")
-    p = _RuleParser(text, scene, require_scene)
-    p._last_ground = {}
-    return p.parse()
+    return _RuleParser(text, scene, require_scene).parse()

@@ -5,6 +5,7 @@ from pathlib import Path
 from morphosim_gym.language.evaluate import canonical_label, evaluate, format_report, load_corpus
 
 CORPUS = Path(__file__).with_name("corpus.jsonl")
+HELDOUT = Path(__file__).with_name("heldout.jsonl")  # written after tuning on CORPUS; see the language README
 
 
 def test_corpus_is_large_and_well_formed():
@@ -25,3 +26,9 @@ def test_corpus_accuracy(minilm):
     assert rep["exact"] >= 0.95, format_report(rep)
     # the paper's own examples all parse exactly
     assert rep["by_kind"]["paper"][0] == rep["by_kind"]["paper"][1]
+
+
+def test_heldout_accuracy(minilm):
+    rep = evaluate(load_corpus(HELDOUT))
+    print("\nheld-out: " + format_report(rep).splitlines()[0])
+    assert rep["exact"] >= 0.95, format_report(rep)
