@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import BackendUnavailableError
 
-__all__ = ["MODEL_NAME", "EMBEDDING_DIM", "embedding_dim", "embed", "embed_one", "similarity", "is_loaded",
+__all__ = ["MODEL_NAME", "EMBEDDING_DIM", "embedding_dim", "embed", "embed_one", "encode_table", "similarity", "is_loaded",
            "is_available", "load", "cache_size", "clear_cache"]
 
 MODEL_NAME = "sentence-transformers/all-MiniLM-L6-v2"
@@ -130,6 +130,26 @@ def embed(texts: Sequence[str]) -> np.ndarray:
                 v = _cache.setdefault(t, v)
         out[i] = v
     return out
+
+
+def encode_table(texts: Sequence[str]) -> np.ndarray:
+    """Encode a constant list of phrases in one batch (~10x faster than `embed` for long lists).
+
+    Padding makes a batch's vectors differ from one-at-a-time vectors in the last bits (~1e-7),
+    so these are not cached and not mixed with `embed`'s: use it for fixed tables (the category
+    anchors of grounding), where the same list always gives bit-identical vectors.
+
+    Returns:
+        float32 [N, 384], rows L2-normalised.
+    """
+    texts = list(texts)
+    if not texts:
+        return np.empty((0, EMBEDDING_DIM), dtype=np.float32)
+    model = load()
+    v = np.asarray(model.encode(texts, batch_size=len(texts), convert_to_numpy=True, show_progress_bar=False),
+                   dtype=np.float32)
+    n = np.linalg.norm(v, axis=1, keepdims=True)
+    return v / np.where(n > 0, n, 1.0)
 
 
 def embed_one(text: str) -> np.ndarray:

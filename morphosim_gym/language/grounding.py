@@ -89,8 +89,8 @@ def _anchor_table(settings: bool) -> tuple[np.ndarray, list[tuple[str, str]], np
                 for s, words in SETTINGS.items():
                     labels.append(("setting", s))
                     phrases.append(f"the {words[0]}")
-            vec = embeddings.embed(phrases)
-            _anchors[settings] = (vec, labels, embeddings.embed(list(_REJECT_ANCHORS)))
+            table = embeddings.encode_table(phrases + list(_REJECT_ANCHORS))
+            _anchors[settings] = (table[:len(phrases)], labels, table[len(phrases):])
         return _anchors[settings]
 
 

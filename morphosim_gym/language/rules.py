@@ -141,7 +141,9 @@ SPATIAL_NOUNS = {"edge", "edges", "side", "sides", "end", "center", "centre", "m
                  "destination", "start", "origin", "point", "frame", "screen", "scene", "picture", "image",
                  "view", "world", "sunlight", "sun", "light", "air", "waves", "current", "wind", "dark", "night",
                  "day", "morning", "evening", "sunset", "sunrise", "weather", "rain", "fog", "mist", "shadow",
-                 "shadows", "lane", "trail", "course", "route", "pace", "speed", "motion", "manner"}
+                 "shadows", "lane", "trail", "course", "route", "pace", "speed", "motion", "manner",
+                 "runway", "airport", "track", "tracks", "railway", "rail", "rails", "bridge", "tunnel", "sidewalk",
+                 "other", "another"}
 _PREAMBLE_1 = {"please", "now", "and", "also", "then", "next", "finally", "so", "ok", "okay", "just", "kindly",
                "afterward", "after", "later", "lastly", "additionally", "first", "second", "third"}
 _PREAMBLE_N = [("can", "you"), ("could", "you"), ("would", "you"), ("will", "you"), ("i", "want", "you", "to"),
@@ -275,6 +277,8 @@ def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:
                 j += 1
                 continue
             break
+        if collected and w in DETS and w not in ("all", "every", "each"):
+            break  # an article starts the next phrase ("a retriever fetches a ball")
         if known_head:
             # after a known noun only another known noun continues the phrase ("table lamp")
             if noun_to_category(w) is None:
@@ -500,6 +504,10 @@ class _PhraseScanner:
                     pred.to_side = (_dir(side2[0]), " ".join(toks[i:i + side[1] + 1 + side2[1]]))
                     i += side[1] + 1 + side2[1]
                     continue
+            if w in ("to", "toward", "into", "onto") and nxt in ("each", "one") and i + 2 < end and toks[i + 2] in (
+                    "other", "another"):
+                i += 3
+                continue
             if w in ("to", "toward", "into", "onto", "until", "reaching") or (w == "up" and nxt == "to"):
                 if w == "up":
                     i += 1
@@ -694,6 +702,15 @@ class _PhraseScanner:
                 pred.settings.append(s)
                 i += 1
                 continue
+            if w in ("each", "one") and nxt in ("other", "another"):
+                i += 2  # "towards each other": a relation between the subjects, not an object
+                continue
+            if (w in ("a", "an", "the", "two", "three", "some") or noun_to_category(w)) and not self.edit:
+                np_ = _parse_np(toks[:end], i)  # an object of some verb ("a dog fetches a ball")
+                if np_ is not None and np_.kind == "category" and np_.end > i:
+                    pred.statics.append(np_)
+                    i = np_.end
+                    continue
             if w in AUX or w in INTENSIFIERS or w in RELATIVE or w in DETS or w in CONJ or w == ",":
                 i += 1
                 continue
@@ -1755,6 +1772,10 @@ _ADDITIVE = {"redder": "red", "bluer": "blue", "greener": "green", "yellower": "
 _DARKER = {"darker": 0.6, "dimmer": 0.6, "duller": 0.7, "darken": 0.6, "dim": 0.6, "blacker": 0.6}
 _BRIGHTER = {"brighter": 1.5, "lighter": 1.5, "brighten": 1.5, "lighten": 1.5, "shinier": 1.3}
 _REMOVE_WORDS = {"disappear", "vanish", "invisible", "gone", "go away", "hidden"}
+_LEFTOVER_OK = {"from", "the", "scene", "view", "frame", "picture", "video", "image", "please", "entirely",
+                "completely", "now", "too", "as", "well", "also", "again", "out", "away", "of", "in", "world",
+                "whole", "entire", "right", "immediately", "instantly", ",", "direction", "motion", "movement",
+                "'s", "trajectory", "path", "course", "heading", "velocity", "only", "just"}
 _FILLER = {"please", "color", "colored", "coloured", "instead", "again", "too", "now", "one", "ones", "as", "well",
            "in", "the", "scene", "from", "entirely", "completely", "totally", "fully", "of", "tint", "shade",
            "hue", "paint", "also"}
@@ -1902,11 +1923,13 @@ class _EditReader:
         if w in ("delete", "remove", "erase", "eliminate", "discard", "getridof", "hide", "clear", "drop", "wipe"):
             if rest and rest[0] in ("out",):
                 rest = rest[1:]
-            targets, _ = self._targets(rest)
+            targets, k = self._targets(rest)
+            self._no_leftover(rest[k:])
             return [dict(op="remove", targets=targets)]
         if w == "take" and rest and (rest[0] in ("out", "away") or rest[-1] in ("out", "away")):
             r = rest[1:] if rest[0] in ("out", "away") else rest[:-1]
-            targets, _ = self._targets(r)
+            targets, k = self._targets(r)
+            self._no_leftover(r[k:])
             return [dict(op="remove", targets=targets)]
         if w in ("extract", "isolate", "segment", "separate", "single", "pull", "cut", "keep", "show", "only"):
             r = [x for x in rest if x not in ("out", "only", "just")]
@@ -1916,14 +1939,16 @@ class _EditReader:
                     # "keep the ball moving" / "keep the camera still"
                     return self._make(rest, verb="keep")
                 raise self.fail(f"expected '{w} only X'")
-            targets, _ = self._targets(r)
+            targets, k = self._targets(r)
+            self._no_leftover(r[k:])
             return [dict(op="extract", targets=targets)]
         if w in ("reverse", "invert", "flip"):
             r = [x for x in rest if x not in ("the", "direction", "directions", "motion", "movement", "of", "trajectory",
                                               "path", "course", "heading", "velocity", "'s")]
             if not r and rest:
                 r = rest
-            targets, _ = self._targets(r or ["it"])
+            targets, k = self._targets(r or ["it"])
+            self._no_leftover((r or ["it"])[k:])
             return [dict(op="reverse", targets=targets)]
         if w in ("stop", "halt", "freeze", "pause"):
             r = [x for x in rest if x not in ("from", "moving", "motion", "the", "movement", "of")]
@@ -1954,6 +1979,13 @@ class _EditReader:
             implied = {"bounce": "bounce", "zigzag": "zigzag"}.get(w)
             return self._motion_ops(targets, rest[k:], implied=implied, verb=w)
         raise self.fail(f"'{w}' is not an edit this parser knows")
+
+    def _no_leftover(self, rest: Sequence[str]) -> None:
+        """Words after the targets of remove/extract/reverse must be fillers ("from the scene"), so that
+        "delete everything except the ball" fails instead of deleting everything."""
+        extra = [w for w in rest if w not in _LEFTOVER_OK]
+        if extra:
+            raise self.fail(f"could not read {' '.join(rest)!r} after what to edit")
 
     # targets -------------------------------------------------------------------------------------------------
     def _targets(self, toks: list[str], required: bool = True) -> tuple[list[_TargetDraft], int]:
