@@ -7,6 +7,8 @@ environments. See the README for the tour.
 
 from .errors import BackendUnavailableError, CommandError, EditError
 from .language import Plan, parse
+from .pipeline import MorphoSim, SimConfig
+from .generate.compose import GenerationConfig
 from .render import RenderOutput, rasterize, render
 from .scene import (
     Camera,
@@ -29,6 +31,7 @@ from .scene import (
 __version__ = "0.1.0"
 
 __all__ = [
+    "MorphoSim", "SimConfig", "GenerationConfig",
     "BackendUnavailableError", "CommandError", "EditError", "Plan", "parse",
     "RenderOutput", "rasterize", "render",
     "Camera", "FeatureDecoder", "GeneratedClip", "Gaussians", "Motion", "Provenance", "Scene4D",

@@ -25,7 +25,7 @@ from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, build_parts
 from .parts import SurfaceCloud, parts_to_gaussians
-from .settings import Setting, build_setting
+from .settings import Setting, build_setting, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
 __all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
@@ -206,17 +206,15 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         pitch = math.radians(4.0)
     else:
         pitch = math.radians(20.0)
-    water_level = 0.0
-    setting = build_setting(setting_name, radius=max(distance * 3.5, 6.0 * size),
-                            rng=np.random.default_rng([seed, 2]), budget=int(config.setting_budget * config.detail))
+    levels = setting_levels(setting_name)
     heights = {}
     for inst in instances:
         if inst.mobility == "air":
-            heights[inst.name] = max(setting.air_height, distance * 0.35) if setting_name != "sky" else 0.0
-        elif inst.mobility == "swim" and setting.swim_height is not None:
-            heights[inst.name] = setting.swim_height * max(1.0, size / 0.5) * 0.6 + inst.half[2]
-        elif inst.mobility == "float" and setting.water_level is not None:
-            heights[inst.name] = setting.water_level - 0.35 * inst.half[2] * 2
+            heights[inst.name] = max(levels["air_height"], distance * 0.35) if setting_name != "sky" else 0.0
+        elif inst.mobility == "swim" and levels["swim_height"] is not None:
+            heights[inst.name] = levels["swim_height"] * max(1.0, size / 0.5) * 0.6 + inst.half[2]
+        elif inst.mobility == "float" and levels["water_level"] is not None:
+            heights[inst.name] = levels["water_level"] - 0.12 * inst.half[2] * 2   # a shallow draft
         else:
             heights[inst.name] = 0.0
     lift = {i.name: (bounce_height(i.half) if motions.get(i.spec.name) is not None
@@ -263,8 +261,11 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         if inst.category in ("plate", "bowl", "table", "box", "book"):
             top_of[inst.spec.name] = float(inst.position[2] + 2 * inst.half[2] * (0.35 if inst.category == "bowl" else 1.0))
 
-    # ---- motion planning
+    # ---- camera path, then the setting detailed where it looks
     cameras = _camera_path(plan, base_cam, np.array([0.0, 0.0, focus_z]), config)
+    setting = build_setting(setting_name, radius=max(distance * 3.5, 6.0 * size), rng=np.random.default_rng([seed, 2]),
+                            budget=int(config.setting_budget * config.detail), cameras=cameras)
+    # ---- motion planning
     trajectories: dict[str, PlannedTrajectory] = {}
     for inst in movers:
         m = motions[inst.spec.name]
