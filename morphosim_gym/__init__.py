@@ -28,6 +28,8 @@ from .scene import (
     save_scene,
 )
 
+from . import envs as _envs  # noqa: E402,F401  registers the MorphoSim/*-v0 Gymnasium ids (string entry points)
+
 __version__ = "0.1.0"
 
 __all__ = [

@@ -1,0 +1,143 @@
+"""MorphoSim/Track-v0: keep a named moving object centred with a pan-tilt camera."""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+from .core import MorphoSimEnv
+
+__all__ = ["TrackEnv"]
+
+
+class TrackEnv(MorphoSimEnv):
+    """
+    ## Description
+
+    A sentence ("a red ball bounces from right to left") becomes a dynamic 3D Gaussian scene
+    (MorphoSim). A pan-tilt camera on a tripod stands where the scene's generation camera
+    was, narrower in view, and must keep the named moving object in the centre of its
+    image while the object moves; the object leaves the view if the camera does not
+    follow. The instruction ("keep the red ball in the centre of the view") and the target
+    are in `info`. Scenes come from the task's scene distribution (`tasks/track.yaml`: ten
+    object categories from balls to horses, eight colours, straight, bouncing, circling,
+    zigzag and back-and-forth motions at three speeds), or from `prompt`.
+
+    ## Action Space
+
+    `Box(-1, 1, (3,), float32)`; values outside [-1, 1] are clipped, non-finite values are
+    rejected with a `ValueError` (the step is not taken).
+
+    | Num | Action    | Min | Max | Unit at +-1                                 |
+    |-----|-----------|-----|-----|---------------------------------------------|
+    | 0   | pan rate  | -1  | 1   | 60 deg/s, positive turns left               |
+    | 1   | tilt rate | -1  | 1   | 45 deg/s, positive looks up                 |
+    | 2   | zoom rate | -1  | 1   | 20 deg/s of field of view, positive zooms in |
+
+    Pan is limited to +-100 deg, tilt to +-60 deg, the field of view to [12, 50] deg.
+
+    ## Observation Space
+
+    `Dict`:
+    - `rgb`: `Box(0, 255, (height, width, 3), uint8)`, the pan-tilt camera's image.
+    - `depth` (with `depth=True`): `Box(0, inf, (height, width), float32)`, metres along the
+      camera axis (0 where nothing is drawn).
+    - `segmentation` (with `segmentation=True`): `Box(-1, 100, (height, width), int32)`,
+      object ids (`info["id_to_name"]`), -1 background.
+    - `proprio`: `Box(low, high, (6,), float32)`: pan (rad, +-1.745), tilt (rad, +-1.047), zoom in [-1, 1]
+      (-1 widest), the last applied action [3].
+
+    With several `cameras`, the first gives `rgb`/`depth`/`segmentation` and each other
+    camera `name` adds `rgb_name` (and `depth_name`, `segmentation_name`).
+
+    ## Rewards
+
+    `reward = reward_centred + reward_framing + reward_ctrl`, in [-0.02, 1]:
+    - `reward_centred = 0.8 * c`, with `c = tolerance(d, (0, 0.15), margin=0.6)` and `d` the
+      distance of the target's projected centre from the image centre in half-image units;
+    - `reward_framing = 0.2 * c * tolerance(size, (0.12, 0.6), margin=0.15)`, with `size` the
+      target's apparent diameter as a fraction of the image height;
+    - `reward_ctrl = -0.02 * mean(action ** 2)`.
+
+    The terms are in `info` under the same names. Weights and radii are task parameters
+    (`tasks/track.yaml` `params`, or `task_params`).
+
+    ## Starting State
+
+    The camera is aimed at the target's start position plus a uniform random pan and tilt
+    error of up to 0.6 half-fields of view each, at a 30 deg field of view. Scene time 0.
+
+    ## Episode End
+
+    The episode truncates when scene time reaches the end of the clip (49 frames at 8 fps =
+    6 s; 60 steps at the default 10 Hz). It never terminates. `info["success"]` is True when
+    the target was centred (`d <= 0.15` and visible) on at least 70% of the steps so far.
+
+    ## Arguments
+
+    | Parameter | Type | Default | Description |
+    |---|---|---|---|
+    | `task` | `str \\| TaskSpec \\| dict \\| None` | `None` | task spec: a built-in name, a YAML path, a mapping; None = `"track"` |
+    | `prompt` | `str \\| None` | `None` | fixed prompt for every episode instead of the task's scene distribution |
+    | `target` | `str \\| None` | `None` | target object name; None = the first moving object of the prompt |
+    | `scene_seed` | `int \\| None` | `None` | fixed generation seed; None = drawn from the reset seed |
+    | `scene_pool` | `int \\| None` | `None` | pre-build this many scenes at construction; resets draw from them |
+    | `pool_seed` | `int` | `0` | seed of the scene pool's draws |
+    | `width` | `int` | `84` | observation image width, pixels |
+    | `height` | `int` | `84` | observation image height, pixels |
+    | `depth` | `bool` | `False` | add `depth` observations |
+    | `segmentation` | `bool` | `False` | add `segmentation` (instance id) observations |
+    | `cameras` | `tuple[str, ...] \\| None` | `None` | rig cameras to observe; None = `("eye",)` |
+    | `control_hz` | `float` | `10.0` | control rate; scene time advances 1 / control_hz per step |
+    | `detail` | `float` | `0.5` | Gaussian budget multiplier of generated scenes |
+    | `reconstruction` | `str` | `"oracle"` | how a clip becomes a scene (`MorphoSim` config) |
+    | `render_agent` | `bool \\| None` | `None` | draw the rig's own geoms; None = task default (False) |
+    | `on_edit_error` | `str` | `"raise"` | failed edits: `"raise"`, or `"skip"` and go on with the unedited scene |
+    | `render_mode` | `str \\| None` | `None` | `"rgb_array"` for `render()` |
+    | `render_width` | `int` | `256` | `render()` frame width |
+    | `render_height` | `int` | `256` | `render()` frame height |
+    | `render_threads` | `int \\| None` | `None` | numba threads for rendering (process-wide); None = leave as is |
+    | `sim` | `MorphoSim \\| None` | `None` | a configured `MorphoSim` (overrides `detail`, `reconstruction`) |
+    | `task_params` | `dict \\| None` | `None` | overrides of `TrackTask.PARAMS` |
+
+    Reset options: `prompt`, `scene_seed`, `target`, `edits` (language edits applied
+    before the episode), `camera` (`position`, `look_at`, `fov_y_deg` of the tripod camera),
+    `on_edit_error`. `env.unwrapped.perturb(text)` edits the scene mid-episode.
+
+    ## Version History
+
+    - v0: initial version.
+    """
+
+    task_kind = "track"
+
+    def __init__(
+        self,
+        task: Any = None,
+        prompt: Optional[str] = None,
+        target: Optional[str] = None,
+        scene_seed: Optional[int] = None,
+        scene_pool: Optional[int] = None,
+        pool_seed: int = 0,
+        width: int = 84,
+        height: int = 84,
+        depth: bool = False,
+        segmentation: bool = False,
+        cameras: Optional[tuple[str, ...]] = None,
+        control_hz: float = 10.0,
+        detail: float = 0.5,
+        reconstruction: str = "oracle",
+        render_agent: Optional[bool] = None,
+        on_edit_error: str = "raise",
+        render_mode: Optional[str] = None,
+        render_width: int = 256,
+        render_height: int = 256,
+        render_threads: Optional[int] = None,
+        sim: Any = None,
+        task_params: Optional[dict] = None,
+    ) -> None:
+        super().__init__(task=task, prompt=prompt, target=target, scene_seed=scene_seed, scene_pool=scene_pool,
+                         pool_seed=pool_seed, width=width, height=height, depth=depth, segmentation=segmentation,
+                         cameras=cameras, control_hz=control_hz, detail=detail, reconstruction=reconstruction,
+                         render_agent=render_agent, terminate_on_success=False, on_edit_error=on_edit_error,
+                         render_mode=render_mode, render_width=render_width, render_height=render_height,
+                         render_threads=render_threads, sim=sim, task_params=task_params)

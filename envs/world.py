@@ -1,0 +1,107 @@
+"""`SceneWorld`: the world half of an env (dm_control's "physics"): a `Scene4D` at a time, the
+target object, and small named accessors the tasks read.
+
+Scene time follows the control rate: `t = step / control_hz`, interpolated between the
+clip's frames by `Scene4D.at`. The world never renders; the env does.
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from morphosim_gym.scene import Camera, Gaussians, Scene4D, SceneObject
+
+__all__ = ["SceneWorld"]
+
+
+class SceneWorld:
+    """A scene, its target and the episode clock.
+
+    Args:
+        scene: the episode's scene (after any reset edits).
+        target: the target object (one of `scene.objects`).
+
+    Attributes:
+        t: scene time in seconds.
+        target_radius: the target's bounding radius at t = 0 (metres), from the scene as it
+            was at reset (kept through later edits so success distances do not jump).
+    """
+
+    def __init__(self, scene: Scene4D, target: SceneObject) -> None:
+        self.t = 0.0
+        self.target = target
+        self._cached_key: tuple = ()
+        self._cached_pos = np.zeros(3)
+        self._scene = scene
+        self._index = np.flatnonzero(scene.gaussians.object_ids == target.id)
+        if self._index.size == 0:
+            raise ValueError(f"Expected Gaussians for the target {target.name!r}, found none")
+        g0 = scene._at_shared(0.0)
+        pts = g0.means[self._index].astype(np.float64)
+        c = pts.mean(axis=0)
+        self.target_radius = float(np.linalg.norm(pts - c, axis=1).max())
+        self.target_floor = float(pts[:, 2].min())
+        cam = scene.camera
+        others = [o for o in scene.objects if o.role != "background"]
+        centres = [scene.object_center(o.id, 0.0) for o in others] or [c]
+        centroid = np.mean(centres, axis=0)
+        fwd = cam.forward
+        along = max(float((centroid - cam.position) @ fwd), 1e-3)
+        self.focus = cam.position + along * fwd
+        self.extent = float(np.linalg.norm(self.focus - cam.position))
+        self.ground_z = 0.0
+
+    # ------------------------------------------------------------ the scene
+    @property
+    def scene(self) -> Scene4D:
+        """The current scene (edits replace it)."""
+        return self._scene
+
+    def set_scene(self, scene: Scene4D) -> None:
+        """Replace the scene (after an edit); the target keeps its id and may vanish (removed)."""
+        self._scene = scene
+        self._index = np.flatnonzero(scene.gaussians.object_ids == self.target.id)
+
+    @property
+    def generation_camera(self) -> Camera:
+        """The scene's generation camera."""
+        return self._scene.camera
+
+    @property
+    def duration(self) -> float:
+        """Seconds of the clip."""
+        return self._scene.duration
+
+    def gaussians(self, t: Optional[float] = None) -> Gaussians:
+        """World Gaussians at time t (default now); cached, not to be modified."""
+        return self._scene._at_shared(self.t if t is None else t)
+
+    # ------------------------------------------------------------ the target
+    @property
+    def target_present(self) -> bool:
+        """Whether the target still has Gaussians (an edit may have removed it)."""
+        return self._index.size > 0
+
+    def target_position(self, t: Optional[float] = None) -> Optional[np.ndarray]:
+        """[3] mean position of the target's Gaussians at time t (default now), or None if removed."""
+        if self._index.size == 0:
+            return None
+        t = self.t if t is None else float(t)
+        key = (id(self._scene), t)
+        if self._cached_key != key:
+            g = self.gaussians(t)
+            self._cached_pos = g.means[self._index].mean(axis=0, dtype=np.float64)
+            self._cached_key = key
+        return self._cached_pos.copy()
+
+    def target_path(self, n: int = 25) -> np.ndarray:
+        """[n, 3] target positions at n evenly spaced times over the clip."""
+        times = np.linspace(0.0, self.duration, n)
+        pts = [self.target_position(float(t)) for t in times]
+        if pts[0] is None:
+            raise ValueError(f"Expected the target {self.target.name!r} in the scene, found it removed")
+        out = np.array(pts)
+        self._scene._at_shared(self.t)      # leave the scene's cache at the current time
+        return out
