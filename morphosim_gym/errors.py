@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["CommandError", "EditError", "BackendUnavailableError"]
+__all__ = ["CommandError", "EditError", "BackendUnavailableError", "TargetNotFoundError", "AmbiguousTargetError"]
 
 
 class CommandError(ValueError):
@@ -18,3 +18,14 @@ class EditError(ValueError):
 class BackendUnavailableError(RuntimeError):
     """An optional backend (gsplat on CUDA, diffusion weights, an LLM endpoint...) is not usable
     here; the message names what is missing and how to install it."""
+
+
+class TargetNotFoundError(CommandError, EditError):
+    """An edit names something the scene does not have ("delete the giraffe" in a street scene);
+    the message lists the scene's objects. Both a `CommandError` (from `parse(text, scene)`) and an
+    `EditError` (from `sim.edit`)."""
+
+
+class AmbiguousTargetError(CommandError, EditError):
+    """An edit target matches objects of different categories about equally well; the message
+    asks which one (say "all ..." to edit every match)."""

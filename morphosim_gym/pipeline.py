@@ -73,9 +73,11 @@ class MorphoSim:
             raise ValueError(f"Expected SimConfig fields, found unknown {sorted(unknown)}; "
                              f"known: {sorted(asdict(config))}")
         self.config = replace(config, **overrides)
+        from .edit import SceneEditor, Selector
         from .generate.procedural import ProceduralBackend
 
         self._generator = ProceduralBackend(self.config.generation, self.config.render_backend)
+        self.editor = SceneEditor(Selector(backend=self.config.render_backend))
 
     # -------------------------------------------------------------- parsing
     def parse(self, text: str, scene: Scene4D | None = None) -> Any:
@@ -115,8 +117,18 @@ class MorphoSim:
     def generate(self, prompt: str, seed: int = 0) -> Scene4D:
         """Generate and reconstruct: a sentence to an editable Scene4D. Follow-up edits of a
         compound command ("...; then make the cube blue") are applied in order."""
+        plan = self.parse(prompt)
         clip = self.generate_clip(prompt, seed)
-        return self.reconstruct(clip)
+        scene = self.reconstruct(clip)
+        for follow in plan.then:
+            scene = self.edit(scene, follow.text)
+        return scene
+
+    # --------------------------------------------------------------- edits
+    def edit(self, scene: Scene4D, text: str) -> Scene4D:
+        """Apply a language edit to a scene without re-generating it: a new scene whose `undo()` is
+        `scene` (see `morphosim_gym.edit.SceneEditor`)."""
+        return self.editor.edit(scene, text)
 
     # ---------------------------------------------------------------- cache
     def _cache_path(self, kind: str, prompt: str, seed: int) -> Path:

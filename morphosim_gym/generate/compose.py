@@ -28,7 +28,7 @@ from .parts import SurfaceCloud, parts_to_gaussians
 from .settings import Setting, build_setting, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
-__all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
+__all__ = ["GenerationConfig", "ComposedScene", "compose_scene", "camera_path"]
 
 MAX_INSTANCES = 12
 
@@ -124,9 +124,10 @@ def _choose_setting(plan: Any, instances: Sequence[Instance]) -> str:
     return setting
 
 
-def _camera_path(plan: Any, base: Camera, centre: np.ndarray, config: GenerationConfig) -> list[Camera]:
-    spec = plan.camera
-    T = config.num_frames
+def camera_path(spec: Any, base: Camera, centre: np.ndarray, num_frames: int) -> list[Camera]:
+    """Per-frame cameras for a `CameraSpec` (fixed, orbit, pan, dolly) starting from `base`, orbiting
+    or dollying about `centre`."""
+    T = num_frames
     if spec is None or spec.motion == "fixed" or T == 1:
         return [base] * T
     tau = np.linspace(0.0, 1.0, T)
@@ -262,7 +263,7 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
             top_of[inst.spec.name] = float(inst.position[2] + 2 * inst.half[2] * (0.35 if inst.category == "bowl" else 1.0))
 
     # ---- camera path, then the setting detailed where it looks
-    cameras = _camera_path(plan, base_cam, np.array([0.0, 0.0, focus_z]), config)
+    cameras = camera_path(plan.camera, base_cam, np.array([0.0, 0.0, focus_z]), config.num_frames)
     setting = build_setting(setting_name, radius=max(distance * 3.5, 6.0 * size), rng=np.random.default_rng([seed, 2]),
                             budget=int(config.setting_budget * config.detail), cameras=cameras)
     # ---- motion planning

@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import CommandError
+from ..errors import AmbiguousTargetError, CommandError, TargetNotFoundError
 from . import embeddings
 from .lexicon import english_words
 from .vocabulary import CATEGORIES, SETTINGS, noun_to_category, singular, word_to_setting
@@ -38,6 +38,8 @@ GROUNDING_FLOOR = 0.45
 # words drift towards arbitrary categories at ~0.45-0.50 (calibrated on 76 real and 30 bad nouns).
 GROUNDING_FLOOR_UNKNOWN_WORD = 0.52
 SCENE_FLOOR = 0.45
+AMBIGUITY_MARGIN = 0.03   # other categories this close to the best match make a target ambiguous
+ALL_MARGIN = 0.1          # "all the animals": every category this close to the best match
 CAMERA_WORDS = ("camera", "view", "viewpoint", "shot", "cam")
 ALL_WORDS = ("*", "everything", "all", "scene", "objects", "things", "everybody", "everyone")
 
@@ -208,10 +210,17 @@ def resolve_in_scene(noun: str, items: Sequence[SceneItem], text: str | None = N
         score = np.maximum(names @ q, cats @ q)
         best = float(score.max())
         if best >= SCENE_FLOOR:
-            top = [it for it, s in zip(pool, score) if s >= best - 1e-6]
-            hits = [it for it in pool if it.category in {t.category for t in top}]
+            wants_all = bool(set(text.lower().split()) & {"all", "every", "both", "each"})
+            margin = ALL_MARGIN if wants_all else AMBIGUITY_MARGIN
+            close = [it for it, s in zip(pool, score) if s >= max(best - margin, SCENE_FLOOR)]
+            cats = sorted({t.category for t in close})
+            if len(cats) > 1 and not wants_all:
+                raise AmbiguousTargetError(
+                    f"{text!r} could mean {' or '.join(cats)} (similar matches); name one, or say 'all' to edit "
+                    f"every match. The scene's objects are: {_describe(items)}")
+            hits = [it for it in pool if it.category in cats]
     if not hits:
-        raise CommandError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
+        raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
     if color is not None and len(hits) > 1:
         colored = [it for it in hits if it.color is not None]
         if colored:

@@ -320,7 +320,8 @@ def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:
             j += 1
             continue
         collected.append(j)
-        if noun_to_category(w) is not None or w in CAMERA_WORDS or w in ALL_WORDS and w != "all":
+        if (noun_to_category(w) is not None or (edit and word_to_setting(w)) or w in CAMERA_WORDS
+                or w in ALL_WORDS and w != "all"):
             known_head = True
         j += 1
     if not collected:

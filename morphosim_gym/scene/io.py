@@ -55,6 +55,9 @@ def _atomic_write(path: Path, chunks: list[bytes]) -> None:
                 fh.write(c)
             fh.flush()
             os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)          # mkstemp makes 0600 files; give the usual permissions
         os.replace(tmp, path)
     except BaseException:
         try:

@@ -1,0 +1,182 @@
+"""Which Gaussians an edit target means: the paper's feature-field query with a threshold search.
+
+1. The parser resolves the target's words to scene objects by meaning ("the vehicle" -> the
+   bus; no match or an ambiguous one is an error naming the objects).
+2. If the scene carries a distilled feature field (a "semantic" decoder), every Gaussian's
+   latent f_j is decoded, its cosine similarities s to the prompt set T (the scene's object
+   names plus the query) go through a softmax p(tau | j) = exp(s_tau / temp) / sum exp(s_i / temp),
+   and the Gaussian's relevance is the probability mass of the prompts that mean the target
+   (the query and the matched objects' names).
+3. The agent loop tries a range of thresholds on that relevance, renders each candidate
+   selection from the generation camera at a few times (one pass, one channel per
+   candidate), scores it (default `MaskAgreementScorer`: agreement with the 2D map of the
+   target — the pixels the scene's own instance map gives to the matched objects — and
+   consistency of the selected area over time; an LLM/VLM judge can implement the same
+   `CandidateScorer` interface) and keeps the best.
+Scenes without a feature field (e.g. the generator's ground truth) select the matched objects'
+Gaussians by their object ids. Results are cached per scene geometry and query, so a second
+edit of the same target (a recolour after a recolour, say) skips all of this.
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence
+
+import numpy as np
+
+from ..render import render
+from ..scene import Scene4D
+
+__all__ = ["Selection", "CandidateScorer", "MaskAgreementScorer", "Selector", "DEFAULT_THRESHOLDS"]
+
+DEFAULT_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
+
+
+@dataclass
+class Selection:
+    """The Gaussians an edit applies to.
+
+    Attributes:
+        mask: [N] bool over the scene's Gaussians.
+        object_ids: the scene objects the target was resolved to.
+        method: "feature_field" or "object_ids".
+        threshold: the chosen relevance threshold (feature field only).
+        scores: (threshold, score) of every candidate tried.
+        relevance: [N] relevance of each Gaussian (feature field only).
+    """
+
+    mask: np.ndarray
+    object_ids: tuple[int, ...]
+    method: str
+    threshold: float | None = None
+    scores: list[tuple[float, float]] = field(default_factory=list)
+    relevance: np.ndarray | None = None
+
+
+class CandidateScorer(Protocol):
+    """Scores candidate selections rendered from the generation camera (higher is better)."""
+
+    def __call__(self, soft_maps: np.ndarray, target_maps: np.ndarray) -> np.ndarray:
+        """soft_maps [times, H, W, candidates], target_maps [times, H, W] bool -> [candidates] scores."""
+        ...
+
+
+class MaskAgreementScorer:
+    """IoU of each candidate's rendered selection (> 0.5) with the target's 2D map, averaged over
+    times, minus `consistency_weight` times the relative spread of the selected area over time."""
+
+    def __init__(self, consistency_weight: float = 0.2) -> None:
+        self.consistency_weight = consistency_weight
+
+    def __call__(self, soft_maps: np.ndarray, target_maps: np.ndarray) -> np.ndarray:
+        sel = soft_maps > 0.5                                                  # [t, H, W, c]
+        tgt = target_maps[..., None]
+        inter = (sel & tgt).sum(axis=(1, 2))
+        union = (sel | tgt).sum(axis=(1, 2))
+        iou = np.where(union > 0, inter / np.maximum(union, 1), 1.0).mean(axis=0)
+        area = sel.sum(axis=(1, 2)).astype(np.float64)
+        spread = area.std(axis=0) / np.maximum(area.mean(axis=0), 1.0)
+        return iou - self.consistency_weight * spread
+
+
+class Selector:
+    """Turns resolved targets into Gaussian selections (see the module docstring).
+
+    Args:
+        thresholds: relevance thresholds the agent loop tries.
+        temperature: softmax temperature over the prompt set.
+        times: how many clip times the candidates are rendered at.
+        scorer: a `CandidateScorer` (default `MaskAgreementScorer`).
+        backend: renderer for the candidates.
+    """
+
+    def __init__(self, thresholds: Sequence[float] = DEFAULT_THRESHOLDS, temperature: float = 0.1, times: int = 3,
+                 scorer: CandidateScorer | None = None, backend: str = "cpu") -> None:
+        self.thresholds = tuple(float(t) for t in thresholds)
+        self.temperature = float(temperature)
+        self.times = int(times)
+        self.scorer = scorer or MaskAgreementScorer()
+        self.backend = backend
+        self._cache: dict[tuple, Selection] = {}
+        self._owners: dict[int, weakref.ref] = {}
+        self._lock = threading.Lock()
+
+    # ------------------------------------------------------------------ api
+    def select(self, scene: Scene4D, object_ids: Sequence[int], query: str) -> Selection:
+        """The Gaussians of `scene` meaning `query`, which the parser resolved to `object_ids`."""
+        ids = tuple(sorted(int(i) for i in object_ids))
+        key = self._key(scene, ids, query)
+        with self._lock:
+            hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        has_field = "semantic" in scene.decoders and scene.gaussians.features is not None
+        sel = self._feature_field(scene, ids, query) if has_field else Selection(
+            np.isin(scene.gaussians.object_ids, ids), ids, "object_ids")
+        with self._lock:
+            self._cache[key] = sel
+        return sel
+
+    def clear(self) -> None:
+        """Forget cached selections."""
+        with self._lock:
+            self._cache.clear()
+            self._owners.clear()
+
+    # ------------------------------------------------------------ internals
+    def _key(self, scene: Scene4D, ids: tuple[int, ...], query: str) -> tuple:
+        """Selections depend on the geometry, ids and features, not on colours: key on the identity of
+        those arrays (edits that do not touch them share them with their parent scene)."""
+        g = scene.gaussians
+        arrays = (g.object_ids, g.features, g.means)
+        with self._lock:
+            for a in arrays:
+                if a is not None and id(a) not in self._owners:
+                    self._owners[id(a)] = weakref.ref(a, lambda _r, k=id(a): self._drop(k))
+        return tuple(id(a) for a in arrays) + (len(g), ids, query.strip().lower(), scene.num_frames)
+
+    def _drop(self, array_id: int) -> None:
+        with self._lock:
+            self._owners.pop(array_id, None)
+            for k in [k for k in self._cache if array_id in k[:3]]:
+                del self._cache[k]
+
+    def relevance(self, scene: Scene4D, ids: Sequence[int], query: str) -> np.ndarray:
+        """[N] probability mass, per Gaussian, of the prompts that mean the target."""
+        from ..language import embeddings
+
+        names = [o.name for o in scene.objects]
+        prompts = names + [query]
+        emb = embeddings.embed(prompts)                                       # [P, 384]
+        decoded = scene.decoders["semantic"](scene.gaussians.features)         # [N, 384], normalised
+        s = decoded @ emb.T / self.temperature
+        s -= s.max(axis=1, keepdims=True)
+        p = np.exp(s)
+        p /= p.sum(axis=1, keepdims=True)
+        wanted = [i for i, o in enumerate(scene.objects) if o.id in set(ids)] + [len(prompts) - 1]
+        return p[:, wanted].sum(axis=1)
+
+    def _feature_field(self, scene: Scene4D, ids: tuple[int, ...], query: str) -> Selection:
+        rel = self.relevance(scene, ids, query)
+        cands = np.stack([rel >= t for t in self.thresholds], axis=1).astype(np.float32)   # [N, C]
+        times = np.linspace(0.0, scene.duration, max(1, self.times))
+        soft, target = [], []
+        for t in times:
+            out = render(_with_features(scene._at_shared(t), cands), scene.camera_at(t), backend=self.backend,
+                         features=True, background=scene.background)
+            soft.append(out.features / np.maximum(out.alpha[..., None], 1e-6))
+            target.append(np.isin(out.instance, ids))
+        scores = self.scorer(np.stack(soft), np.stack(target))
+        best = int(np.argmax(scores))
+        return Selection(cands[:, best] > 0.5, ids, "feature_field", self.thresholds[best],
+                         [(t, float(s)) for t, s in zip(self.thresholds, scores)], rel)
+
+
+def _with_features(g, features: np.ndarray):
+    from ..scene import Gaussians
+
+    return Gaussians._trusted(means=g.means, quats=g.quats, scales=g.scales, opacities=g.opacities, colors=g.colors,
+                              features=features, object_ids=g.object_ids)

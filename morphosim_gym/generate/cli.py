@@ -1,0 +1,148 @@
+"""`morphosim generate`, `morphosim render` and `morphosim edit`: scenes from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["register", "write_video"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the generation, rendering and editing subcommands."""
+    p = sub.add_parser("generate", help="generate a 4D scene from a sentence: video, scene file, clip, summary")
+    p.add_argument("prompt")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size", type=int, default=128, help="frame width and height in pixels")
+    p.add_argument("--frames", type=int, default=49)
+    p.add_argument("--fps", type=float, default=8.0)
+    p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
+    p.set_defaults(func=_generate)
+
+    p = sub.add_parser("render", help="render a scene file to a video (optionally orbiting it)")
+    p.add_argument("scene")
+    p.add_argument("--out", required=True, help="video path (.mp4 or .gif)")
+    p.add_argument("--orbit", action="store_true", help="orbit the camera around the scene centre")
+    p.add_argument("--degrees", type=float, default=360.0, help="orbit sweep in degrees")
+    p.add_argument("--size", type=int, default=None, help="render size (default: the scene camera's)")
+    p.add_argument("--frames", type=int, default=None, help="number of video frames (default: the clip's)")
+    p.add_argument("--fps", type=float, default=None)
+    p.set_defaults(func=_render)
+
+    p = sub.add_parser("edit", help="edit a scene by language and write it with a before/after video")
+    p.add_argument("scene")
+    p.add_argument("text")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--novel-yaw", type=float, default=30.0, help="yaw of the novel view, degrees")
+    p.set_defaults(func=_edit)
+
+
+def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
+    """Write uint8 frames as mp4 or gif (by extension), atomically."""
+    import imageio.v2 as imageio
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    suffix = path.suffix.lower()
+    if suffix not in (".mp4", ".gif"):
+        raise ValueError(f"Expected a video path ending in .mp4 or .gif, found {path.name!r}")
+    with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
+        tmp_path = Path(tmp) / f"video{suffix}"
+        if suffix == ".gif":
+            imageio.mimsave(tmp_path, frames, duration=1000.0 / fps, loop=0)
+        else:
+            imageio.mimsave(tmp_path, frames, fps=fps, macro_block_size=1)
+        shutil.move(str(tmp_path), path)
+    return path
+
+
+def _generate(args: argparse.Namespace) -> int:
+    from .. import GenerationConfig, MorphoSim
+    from ..scene import save_clip, save_scene
+
+    out = Path(args.out)
+    sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps))
+    start = time.perf_counter()
+    plan = sim.parse(args.prompt)               # errors before anything is written
+    clip = sim.generate_clip(args.prompt, seed=args.seed)
+    scene = sim.reconstruct(clip)
+    for follow in plan.then:
+        scene = sim.edit(scene, follow.text)
+    seconds = time.perf_counter() - start
+    with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
+        stage = Path(tmp)
+        write_video(list(clip.frames), stage / f"clip.{args.format}", clip.fps)
+        save_scene(scene, stage / "scene.msim")
+        save_clip(clip, stage / "clip.mclip")
+        summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
+                   "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
+                   "objects": [o.to_dict() for o in scene.objects], "setting": clip.info.get("setting"),
+                   "edits": list(scene.history), "plan": plan.to_dict(), "scene_id": scene.content_hash(),
+                   "trajectories": clip.info.get("trajectories", {})}
+        (stage / "summary.json").write_text(json.dumps(summary, indent=2))
+        out.mkdir(parents=True, exist_ok=True)
+        for f in stage.iterdir():
+            shutil.move(str(f), out / f.name)
+    print(json.dumps({k: summary[k] for k in ("prompt", "seed", "seconds", "setting", "edits")}))
+    print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
+    return 0
+
+
+def _render(args: argparse.Namespace) -> int:
+    from ..edit import scene_centre
+    from ..render import render
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    n = args.frames or scene.num_frames
+    fps = args.fps or scene.fps
+    frames = []
+    centre = scene_centre(scene)
+    for i in range(n):
+        t = scene.duration * i / max(n - 1, 1)
+        cam = scene.camera_at(t)
+        if args.size:
+            cam = cam.resized(args.size, args.size)
+        if args.orbit:
+            cam = cam.orbit(args.degrees * i / max(n, 1), centre)
+        frames.append(render(scene, cam, t).rgb_uint8())
+    path = write_video(frames, Path(args.out), fps)
+    print(f"wrote {path} ({n} frames)")
+    return 0
+
+
+def _edit(args: argparse.Namespace) -> int:
+    from .. import MorphoSim
+    from ..edit import scene_centre
+    from ..render import render
+    from ..scene import load_scene, save_scene
+
+    scene = load_scene(args.scene)
+    sim = MorphoSim()
+    start = time.perf_counter()
+    edited = sim.edit(scene, args.text)
+    seconds = time.perf_counter() - start
+    out = Path(args.out)
+    novel = scene.camera.orbit(args.novel_yaw, scene_centre(scene))
+    frames = []
+    for i in range(scene.num_frames):
+        t = i / scene.fps
+        views = [render(s, c, t).rgb_uint8() for c in (scene.camera_at(t), novel) for s in (scene, edited)]
+        top = np.concatenate(views[:2], axis=1)
+        bottom = np.concatenate(views[2:], axis=1)
+        frames.append(np.concatenate([top, bottom], axis=0))
+    out.mkdir(parents=True, exist_ok=True)
+    save_scene(edited, out / "edited.msim")
+    write_video(frames, out / "before_after.mp4", scene.fps)
+    print(json.dumps({"edit": args.text, "seconds": round(seconds, 4), "objects": edited.object_names,
+                      "history": list(edited.history)}))
+    print(f"wrote {out}/edited.msim and before_after.mp4 (top: generation view, bottom: {args.novel_yaw:g} deg "
+          f"novel view; left: before, right: after)")
+    return 0
