@@ -334,7 +334,11 @@ class MorphoSimEnv(gym.Env):
             if policy == "skip":
                 self._edit_errors.append(f"{text}: {exc}")
                 return scene
-            raise type(exc)(f"Edit {text!r} failed: {exc} (pass on_edit_error='skip' to go on without it)") from exc
+            try:
+                err = type(exc)(f"Edit {text!r} failed: {exc} (pass on_edit_error='skip' to go on without it)")
+            except Exception:  # an error type with a different constructor: raise it as it is
+                raise exc
+            raise err from exc
         self._edits.append(text)
         return new
 

@@ -44,8 +44,8 @@ class FindEnv(MorphoSimEnv):
     - `rgb`: `Box(0, 255, (height, width, 3), uint8)`, the free camera's image (60 deg).
     - `depth`, `segmentation` (optional): as in Track.
     - `proprio`: `Box(low, high, (15,), float32)`: position relative to the focus divided by
-      the generation distance [3], the body's x and y axes in the world [6], the last
-      action [6].
+      the generation distance [3] (clipped to +-10), the body's x and y axes in the world
+      [6], the last action [6].
 
     ## Rewards
 

@@ -66,7 +66,7 @@ class Rig:
         self.data = mujoco.MjData(self.model)
         self._mj = mujoco
         self._nominal = {k: getattr(self.model, k).copy()
-                         for k in ("body_pos", "geom_pos", "geom_size", "site_pos", "site_size", "cam_pos")}
+                         for k in ("body_pos", "body_ipos", "geom_pos", "geom_size", "site_pos", "site_size", "cam_pos")}
         self._root = self._id("body", self.root_body) if self.root_body else 1
         # cameras attached to the world body are posed by the env, not scaled with the rig
         self._world_cams = {i for i in range(self.model.ncam) if int(self.model.cam_bodyid[i]) == 0}
@@ -105,6 +105,9 @@ class Rig:
             raise ValueError(f"Expected a positive finite rig scale, found {scale!r}")
         m = self.model
         m.body_pos[:] = self._nominal["body_pos"] * s
+        # geoms whose frame coincides with their body's inertial frame are posed from it
+        # (MuJoCo's geom_sameframe), so the inertial offsets scale too
+        m.body_ipos[:] = self._nominal["body_ipos"] * s
         m.geom_pos[:] = self._nominal["geom_pos"] * s
         m.geom_size[:] = self._nominal["geom_size"] * s
         m.site_pos[:] = self._nominal["site_pos"] * s
