@@ -270,10 +270,12 @@ class MorphoSimEnv(gym.Env):
         # ---- edits before the episode
         policy = opts.get("on_edit_error", self._on_edit_error)
         self._edits, self._edit_errors = [], []
+        world = SceneWorld(scene, target)          # geometry (target size, focus) from the unedited scene
         for text in opts.get("edits", ()):
             scene = self._apply_edit(scene, text, policy)
+        world.set_scene(scene)
         # ---- world, rig, task
-        self._world = SceneWorld(scene, target)
+        self._world = world
         self._step_count = 0
         self._task.initialize_episode(self._world, self._rig, rng, opts.get("camera", {}))
         self._episode = {"prompt": request.prompt, "scene_seed": int(scene_seed), "target": target.name,
