@@ -1,0 +1,161 @@
+"""Env steps per second for every MorphoSim id: single env and 8-env vector envs.
+
+    python benchmarks/envs.py                      # table + benchmarks/results/envs.json
+    python benchmarks/envs.py --ids MorphoSim/Track-v0 --repeats 5 --breakdown
+
+Every number is the median of `--repeats` runs (the machine is shared and noisy; the
+spread is reported too). Settings: default env arguments (84x84 rgb, detail 0.5, 10 Hz)
+plus `scene_pool=8`, random actions, autoreset included (episodes are 60 steps, or shorter
+for Reach/Find when they succeed). Modes:
+
+  single          one env, numba's default threads (both cores)
+  single-1thread  one env, `render_threads=1`
+  single-fresh    one env without a pool: every reset composes a new scene (~30-60 ms)
+  sync-8          SyncVectorEnv of 8 envs in one process (default threads)
+  async-8         AsyncVectorEnv of 8 envs, one process each, `render_threads=1`
+
+`--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
+observation) by calling them directly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import morphosim_gym as ms
+from morphosim_gym.envs import ENV_IDS, make_vec
+
+RESULTS = Path(__file__).resolve().parent / "results"
+MODES = ("single", "single-1thread", "single-fresh", "sync-8", "async-8")
+
+
+def _single(env_id: str, steps: int, **kw) -> float:
+    env = gym.make(env_id, **kw)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    space = env.action_space
+    for _ in range(20):                                   # warm up (JIT caches, first frames)
+        _, _, term, trunc, _ = env.step(rng.uniform(-1, 1, space.shape).astype(np.float32))
+        if term or trunc:
+            env.reset()
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        _, _, term, trunc, _ = env.step(rng.uniform(-1, 1, space.shape).astype(np.float32))
+        if term or trunc:
+            env.reset()
+    rate = steps / (time.perf_counter() - t0)
+    env.close()
+    return rate
+
+
+def _vector(env_id: str, steps: int, mode: str, n: int = 8, **kw) -> float:
+    venv = make_vec(env_id, n, vectorization_mode=mode, **kw)
+    venv.reset(seed=0)
+    rng = np.random.default_rng(0)
+    shape = venv.action_space.shape
+    for _ in range(10):
+        venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
+    rate = steps * n / (time.perf_counter() - t0)
+    venv.close()
+    return rate
+
+
+def measure(env_id: str, mode: str, steps: int) -> float:
+    if mode == "single":
+        return _single(env_id, steps, scene_pool=8)
+    if mode == "single-1thread":
+        return _single(env_id, steps, scene_pool=8, render_threads=1)
+    if mode == "single-fresh":
+        return _single(env_id, steps)
+    if mode == "sync-8":
+        return _vector(env_id, max(1, steps // 8), "sync", scene_pool=8)
+    if mode == "async-8":
+        return _vector(env_id, max(1, steps // 8), "async", scene_pool=8, render_threads=1)
+    raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
+
+
+def breakdown(repeats: int = 300) -> dict:
+    """Milliseconds per part of a Track step (median over `repeats` calls each)."""
+    env = gym.make("MorphoSim/Track-v0", scene_pool=1)
+    env.reset(seed=0)
+    u = env.unwrapped
+    scene = u.world.scene
+    a = np.zeros(3, np.float32)
+    for _ in range(10):
+        env.step(a)
+
+    def timed(fn) -> float:
+        ts = []
+        for i in range(repeats):
+            t0 = time.perf_counter()
+            fn(i)
+            ts.append(time.perf_counter() - t0)
+        return 1e3 * statistics.median(ts)
+
+    times = np.linspace(0.0, scene.duration, repeats)
+    out = {
+        "gaussians": len(scene.gaussians),
+        "skinning scene._at_shared(t)": timed(lambda i: scene._at_shared(float(times[i]) * 0.999 + 1e-6 * i)),
+        "camera from MuJoCo": timed(lambda i: u.rig.camera("eye", 84, 84)),
+        "rig kinematics (apply)": timed(lambda i: u.rig.apply(a, u.dt)),
+    }
+    cam = u.rig.camera("eye", 84, 84)
+    g = scene._at_shared(1.0)
+    out["render 84x84 (ms.render)"] = timed(lambda i: ms.render(g, cam, background=scene.background))
+    view = u._last_view
+    out["task evaluate (reward)"] = timed(lambda i: u.task.measure(u.world, u.rig, view))
+    out["env.step total"] = timed(lambda i: env.step(a) if u.world.t < u.world.duration - 0.2 else env.reset())
+    env.close()
+    return {k: (round(v, 3) if isinstance(v, float) else v) for k, v in out.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--ids", nargs="*", default=list(ENV_IDS))
+    ap.add_argument("--modes", nargs="*", default=list(MODES), choices=MODES)
+    ap.add_argument("--steps", type=int, default=800, help="env steps per run (vector: total over all envs)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--breakdown", action="store_true")
+    ap.add_argument("--json", type=Path, default=RESULTS / "envs.json")
+    args = ap.parse_args()
+
+    rows = []
+    for env_id in args.ids:
+        for mode in args.modes:
+            rates = [measure(env_id, mode, args.steps) for _ in range(args.repeats)]
+            row = {"id": env_id, "mode": mode, "steps_per_s": round(statistics.median(rates), 1),
+                   "min": round(min(rates), 1), "max": round(max(rates), 1), "runs": [round(r, 1) for r in rates]}
+            rows.append(row)
+            print(f"{env_id:22s} {mode:15s} {row['steps_per_s']:8.1f} steps/s  (runs {row['runs']})", flush=True)
+
+    print("\n| id | mode | steps/s (median) | min | max |\n|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['id']} | {r['mode']} | {r['steps_per_s']:.0f} | {r['min']:.0f} | {r['max']:.0f} |")
+    result = {"rows": rows, "settings": {"obs": "rgb 84x84 + proprio", "detail": 0.5, "control_hz": 10,
+                                         "scene_pool": 8, "steps_per_run": args.steps, "repeats": args.repeats},
+              "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+                          "loadavg_at_end": [round(x, 2) for x in os.getloadavg()]}}
+    if args.breakdown:
+        result["track_step_breakdown_ms"] = breakdown()
+        print("\nTrack step breakdown (ms, median):")
+        for k, v in result["track_step_breakdown_ms"].items():
+            print(f"  {k:32s} {v}")
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(result, indent=2) + "\n")
+    print(f"\nwrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
