@@ -76,7 +76,11 @@ def main() -> None:
     ap.add_argument("--eval-episodes", type=int, default=32)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=RESULTS)
+    ap.add_argument("--replot", action="store_true", help="only redraw the plot from saved results")
     args = ap.parse_args()
+    if args.replot:
+        replot(args.out)
+        return
 
     try:
         import torch
@@ -156,6 +160,7 @@ def main() -> None:
         "trained": trained, "random": random,
         "success_definition": "target centred (within 0.15 half-image of the centre, visible) on >= 70% of steps",
         "machine": f"{os.cpu_count()} CPU cores, torch {torch.__version__}",
+        "loadavg_at_end": [round(x, 2) for x in os.getloadavg()],
     }
     (args.out / "ppo_track.json").write_text(json.dumps(result, indent=2) + "\n")
     (args.out / "ppo_track_curve.json").write_text(json.dumps(curve) + "\n")
@@ -164,6 +169,8 @@ def main() -> None:
 
 
 def plot(curve: list[dict], random: dict, trained: dict, path: Path) -> None:
+    """Learning curve: training episodes' return and centred fraction, with the held-out evaluation
+    of the trained and the random policy (returns, centred fractions and success rates)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -173,28 +180,39 @@ def plot(curve: list[dict], random: dict, trained: dict, path: Path) -> None:
         return
     t = np.array([c["timesteps"] for c in curve])
     ret = np.array([c["return"] for c in curve])
-    suc = np.array([c["success"] for c in curve], dtype=float)
+    frac = np.array([c["centred_fraction"] for c in curve])
     k = max(1, min(32, len(curve) // 5))
     kernel = np.ones(k) / k
     smooth = lambda x: np.convolve(x, kernel, mode="valid")  # noqa: E731
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     axes[0].plot(t, ret, ".", alpha=0.2, color="tab:blue")
-    axes[0].plot(t[k - 1:], smooth(ret), color="tab:blue", label=f"PPO (mean of {k} episodes)")
-    axes[0].axhline(random["mean_return"], color="tab:red", ls="--", label="random policy (held-out eval)")
-    axes[0].axhline(trained["mean_return"], color="tab:green", ls=":", label="trained policy (held-out eval)")
+    axes[0].plot(t[k - 1:], smooth(ret), color="tab:blue", label=f"PPO training (mean of {k} episodes)")
+    axes[0].axhline(trained["mean_return"], color="tab:green", ls=":", label="trained, held-out eval")
+    axes[0].axhline(random["mean_return"], color="tab:red", ls="--", label="random, held-out eval")
     axes[0].set_xlabel("env steps")
     axes[0].set_ylabel("episode return (60 steps)")
     axes[0].legend(fontsize=8)
-    axes[1].plot(t[k - 1:], smooth(suc), color="tab:blue", label="PPO training episodes")
-    axes[1].axhline(random["success_rate"], color="tab:red", ls="--", label="random policy (held-out eval)")
-    axes[1].axhline(trained["success_rate"], color="tab:green", ls=":", label="trained policy (held-out eval)")
+    axes[1].plot(t[k - 1:], smooth(frac), color="tab:blue", label="PPO training: centred fraction")
+    axes[1].axhline(trained["centred_fraction"], color="tab:green", ls=":", label="trained, eval: centred fraction")
+    axes[1].axhline(random["centred_fraction"], color="tab:red", ls="--", label="random, eval: centred fraction")
+    axes[1].bar([t[-1] * 1.04], [trained["success_rate"]], width=t[-1] * 0.03, color="tab:green", alpha=0.6,
+                label=f"trained, eval: success rate {trained['success_rate']:.2f}")
+    axes[1].bar([t[-1] * 1.08], [max(random["success_rate"], 0.005)], width=t[-1] * 0.03, color="tab:red",
+                alpha=0.6, label=f"random, eval: success rate {random['success_rate']:.2f}")
     axes[1].set_xlabel("env steps")
-    axes[1].set_ylabel("success rate")
+    axes[1].set_ylabel("fraction of steps centred / success rate")
     axes[1].set_ylim(-0.02, 1.02)
-    axes[1].legend(fontsize=8)
-    fig.suptitle("MorphoSim/Track-v0, PPO CnnPolicy from pixels")
+    axes[1].legend(fontsize=8, loc="upper left")
+    fig.suptitle("MorphoSim/Track-v0, PPO CnnPolicy from pixels (success: centred on >= 70% of steps)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+def replot(out: Path) -> None:
+    """Redraw the plot from the saved results (no training)."""
+    result = json.loads((out / "ppo_track.json").read_text())
+    curve = json.loads((out / "ppo_track_curve.json").read_text())
+    plot(curve, result["random"], result["trained"], out / "ppo_track_curve.png")
 
 
 if __name__ == "__main__":
