@@ -8,11 +8,11 @@ spread is reported too). Settings: default env arguments (84x84 rgb, detail 0.5,
 plus `scene_pool=8`, random actions, autoreset included (episodes are 60 steps, or shorter
 for Reach/Find when they succeed). Modes:
 
-  single          one env, numba's default threads (both cores)
-  single-1thread  one env, `render_threads=1`
-  single-fresh    one env without a pool: every reset composes a new scene (~30-60 ms)
-  sync-8          SyncVectorEnv of 8 envs in one process (default threads)
-  async-8         AsyncVectorEnv of 8 envs, one process each, `render_threads=1`
+  single           one env (default `render_threads=1`)
+  single-2threads  one env, `render_threads=None` (numba's default: both cores)
+  single-fresh     one env without a pool: every reset composes a new scene (~30-60 ms)
+  sync-8           SyncVectorEnv of 8 envs in one process
+  async-8          AsyncVectorEnv of 8 envs, one process each (spawn)
 
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
 observation) by calling them directly.
@@ -35,7 +35,7 @@ import morphosim_gym as ms
 from morphosim_gym.envs import ENV_IDS, make_vec
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODES = ("single", "single-1thread", "single-fresh", "sync-8", "async-8")
+MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8")
 
 
 def _single(env_id: str, steps: int, **kw) -> float:
@@ -75,19 +75,23 @@ def _vector(env_id: str, steps: int, mode: str, n: int = 8, **kw) -> float:
 def measure(env_id: str, mode: str, steps: int) -> float:
     if mode == "single":
         return _single(env_id, steps, scene_pool=8)
-    if mode == "single-1thread":
-        return _single(env_id, steps, scene_pool=8, render_threads=1)
+    if mode == "single-2threads":
+        return _single(env_id, steps, scene_pool=8, render_threads=None)
     if mode == "single-fresh":
         return _single(env_id, steps)
     if mode == "sync-8":
         return _vector(env_id, max(1, steps // 8), "sync", scene_pool=8)
     if mode == "async-8":
-        return _vector(env_id, max(1, steps // 8), "async", scene_pool=8, render_threads=1)
+        return _vector(env_id, max(1, steps // 8), "async", scene_pool=8)
     raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
 
 
 def breakdown(repeats: int = 300) -> dict:
-    """Milliseconds per part of a Track step (median over `repeats` calls each)."""
+    """Milliseconds per part of a Track step (median over `repeats` calls each), with one numba
+    thread as the env uses by default."""
+    import numba
+
+    numba.set_num_threads(1)
     env = gym.make("MorphoSim/Track-v0", scene_pool=1)
     env.reset(seed=0)
     u = env.unwrapped
@@ -143,7 +147,7 @@ def main() -> None:
     print("\n| id | mode | steps/s (median) | min | max |\n|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['id']} | {r['mode']} | {r['steps_per_s']:.0f} | {r['min']:.0f} | {r['max']:.0f} |")
-    result = {"rows": rows, "settings": {"obs": "rgb 84x84 + proprio", "detail": 0.5, "control_hz": 10,
+    result = {"rows": rows, "settings": {"obs": "rgb 84x84 + proprio", "detail": 0.35, "control_hz": 10,
                                          "scene_pool": 8, "steps_per_run": args.steps, "repeats": args.repeats},
               "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                           "loadavg_at_end": [round(x, 2) for x in os.getloadavg()]}}

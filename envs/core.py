@@ -117,7 +117,7 @@ class MorphoSimEnv(gym.Env):
         segmentation: bool = False,
         cameras: Optional[Sequence[str]] = None,
         control_hz: float = 10.0,
-        detail: float = 0.5,
+        detail: float = 0.35,
         reconstruction: str = "oracle",
         render_agent: Optional[bool] = None,
         terminate_on_success: bool = False,
@@ -125,7 +125,7 @@ class MorphoSimEnv(gym.Env):
         render_mode: Optional[str] = None,
         render_width: int = 256,
         render_height: int = 256,
-        render_threads: Optional[int] = None,
+        render_threads: Optional[int] = 1,
         sim: Any = None,
         task_params: Optional[Mapping[str, float]] = None,
     ) -> None:
@@ -247,7 +247,10 @@ class MorphoSimEnv(gym.Env):
     # ================================================================== reset
     def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
         super().reset(seed=seed)
-        opts = self._check_options(options)
+        with _numba_threads(self._render_threads):
+            return self._reset(self._check_options(options))
+
+    def _reset(self, opts: dict) -> tuple[dict, dict]:
         rng = self.np_random
         # ---- which scene
         target_name = opts.get("target", self._target_name)
@@ -363,8 +366,12 @@ class MorphoSimEnv(gym.Env):
 
     # ================================================================== step
     def step(self, action: Any) -> tuple[dict, float, bool, bool, dict]:
-        world = self.world
         a = self._check_action(action)
+        with _numba_threads(self._render_threads):
+            return self._step(a)
+
+    def _step(self, a: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        world = self.world
         self._rig.apply(a, self._dt)
         self._step_count += 1
         world.t = min(self._step_count * self._dt, world.duration)
@@ -400,8 +407,7 @@ class MorphoSimEnv(gym.Env):
 
     def _render(self, t: float) -> dict:
         cams = self._cameras(self._render_cams, self._width, self._height)
-        with _numba_threads(self._render_threads):
-            out = render_scene(self._sources(t), cams, background=self._world.scene.background)
+        out = render_scene(self._sources(t), cams, background=self._world.scene.background)
         self._last_cams = dict(zip(self._render_cams, cams))
         views = {name: (cams[i], out.rgb[i], out.depth[i], out.instance[i]) for i, name in enumerate(self._render_cams)}
         tc = views[self._task.task_camera]

@@ -88,14 +88,14 @@ class TrackEnv(MorphoSimEnv):
     | `segmentation` | `bool` | `False` | add `segmentation` (instance id) observations |
     | `cameras` | `tuple[str, ...] \\| None` | `None` | rig cameras to observe; None = `("eye",)` |
     | `control_hz` | `float` | `10.0` | control rate; scene time advances 1 / control_hz per step |
-    | `detail` | `float` | `0.5` | Gaussian budget multiplier of generated scenes |
+    | `detail` | `float` | `0.35` | Gaussian budget multiplier of generated scenes (0.35: as sharp as 0.5 at 84 px, ~25% faster) |
     | `reconstruction` | `str` | `"oracle"` | how a clip becomes a scene (`MorphoSim` config) |
     | `render_agent` | `bool \\| None` | `None` | draw the rig's own geoms; None = task default (False) |
     | `on_edit_error` | `str` | `"raise"` | failed edits: `"raise"`, or `"skip"` and go on with the unedited scene |
     | `render_mode` | `str \\| None` | `None` | `"rgb_array"` for `render()` |
     | `render_width` | `int` | `256` | `render()` frame width |
     | `render_height` | `int` | `256` | `render()` frame height |
-    | `render_threads` | `int \\| None` | `None` | numba threads for rendering (process-wide); None = leave as is |
+    | `render_threads` | `int \\| None` | `1` | numba threads for this env's skinning and rendering (set per call, then restored); None = numba's default |
     | `sim` | `MorphoSim \\| None` | `None` | a configured `MorphoSim` (overrides `detail`, `reconstruction`) |
     | `task_params` | `dict \\| None` | `None` | overrides of `TrackTask.PARAMS` |
 
@@ -124,14 +124,14 @@ class TrackEnv(MorphoSimEnv):
         segmentation: bool = False,
         cameras: Optional[tuple[str, ...]] = None,
         control_hz: float = 10.0,
-        detail: float = 0.5,
+        detail: float = 0.35,
         reconstruction: str = "oracle",
         render_agent: Optional[bool] = None,
         on_edit_error: str = "raise",
         render_mode: Optional[str] = None,
         render_width: int = 256,
         render_height: int = 256,
-        render_threads: Optional[int] = None,
+        render_threads: Optional[int] = 1,
         sim: Any = None,
         task_params: Optional[dict] = None,
     ) -> None:

@@ -37,8 +37,8 @@ def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", rend
         env_id: a registered id (e.g. "MorphoSim/Track-v0").
         num_envs: how many envs.
         vectorization_mode: "async" (one process per env; the fast choice on several cores) or "sync".
-        render_threads: numba threads per env; None = 1 for "async" (the processes share the
-            cores, one thread each avoids oversubscription) and unchanged for "sync".
+        render_threads: numba threads per env; None = the envs' default (1: on a few cores, small
+            renders gain little from threads and lose a lot when the cores are shared).
         wrappers: callables applied to each env after `gym.make`.
         context: multiprocessing start method for "async" (default "spawn": the parent may
             already run numba's threading layer, which is not safe to fork).
@@ -51,8 +51,6 @@ def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", rend
         raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
     if vectorization_mode not in ("async", "sync"):
         raise ValueError(f"Expected vectorization_mode 'async' or 'sync', found {vectorization_mode!r}")
-    if vectorization_mode == "async" and render_threads is None:
-        render_threads = 1
     if render_threads is not None:
         kwargs = dict(kwargs, render_threads=render_threads)
     fns = [_make_one(env_id, dict(kwargs), tuple(wrappers)) for _ in range(num_envs)]

@@ -39,8 +39,9 @@ def make_env(pool_seed: int, pool: int, size: int):
     from morphosim_gym.envs import RGBObservation
 
     def thunk():
+        # detail=0.5: the committed run used it (the env default was 0.5 then; it is 0.35 now)
         env = gym.make("MorphoSim/Track-v0", width=size, height=size, scene_pool=pool, pool_seed=pool_seed,
-                       render_threads=1)
+                       render_threads=1, detail=0.5)
         return RGBObservation(env)
 
     return thunk

@@ -18,10 +18,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..scene.camera import Camera
+from ..scene.camera import MUJOCO_TO_OPENCV, Camera
 from ..scene.gaussians import Gaussians
 
-__all__ = ["Rig", "RIG_DIR", "yaw_quat", "AGENT_OBJECT_ID"]
+__all__ = ["Rig", "RIG_DIR", "yaw_quat", "AGENT_OBJECT_ID", "mujoco_camera"]
 
 RIG_DIR = Path(__file__).resolve().parent
 AGENT_OBJECT_ID = 100          # instance id the agent's own Gaussians render with
@@ -38,6 +38,24 @@ def _mujoco() -> Any:
 def yaw_quat(yaw: float) -> np.ndarray:
     """[4] w, x, y, z rotation by `yaw` radians about world z."""
     return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+
+
+def mujoco_camera(cam_xpos: np.ndarray, cam_xmat: np.ndarray, fovy: float, width: int, height: int,
+                  near: float) -> Camera:
+    """`Camera.from_mujoco` for the per-step hot path: the same arithmetic, without re-validating
+    what MuJoCo guarantees (an orthonormal `cam_xmat`, a finite position). Equal (==) to
+    `Camera.from_mujoco(cam_xpos, cam_xmat, fovy, width, height, near)`."""
+    r = np.asarray(cam_xmat, dtype=np.float64).reshape(3, 3) @ MUJOCO_TO_OPENCV     # camera -> world
+    w2c = np.eye(4)
+    w2c[:3, :3] = r.T
+    w2c[:3, 3] = -r.T @ np.asarray(cam_xpos, dtype=np.float64)
+    w2c.setflags(write=False)
+    f = 0.5 * height / math.tan(math.radians(fovy) / 2.0)
+    cam = object.__new__(Camera)
+    for name, value in (("width", int(width)), ("height", int(height)), ("fx", f), ("fy", f),
+                        ("cx", width / 2.0), ("cy", height / 2.0), ("world_to_camera", w2c), ("near", float(near))):
+        object.__setattr__(cam, name, value)
+    return cam
 
 
 class Rig:
@@ -165,8 +183,8 @@ class Rig:
         i = self._id("camera", name)
         if near is None:
             near = 0.01 * self.scale if i not in self._world_cams else 0.01
-        return Camera.from_mujoco(self.data.cam_xpos[i], self.data.cam_xmat[i], float(self.model.cam_fovy[i]),
-                                  width, height, near=max(float(near), 1e-4))
+        return mujoco_camera(self.data.cam_xpos[i], self.data.cam_xmat[i], float(self.model.cam_fovy[i]),
+                             width, height, max(float(near), 1e-4))
 
     def site_position(self, name: str) -> np.ndarray:
         """[3] world position of a site (a copy)."""

@@ -59,6 +59,21 @@ def test_camera_of_a_rig_matches_camera_from_mujoco_camera():
     assert a == b
 
 
+def test_fast_mujoco_camera_equals_the_validated_one():
+    from morphosim_gym.rig.base import mujoco_camera
+
+    rig = FreeCameraRig()
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        rig.place(rng.normal(size=3), rng.normal(size=3) + 3, centre=(0, 0, 0), extent=1.0, roll=rng.normal())
+        i = rig.model.camera("eye").id
+        for w, h in ((64, 48), (84, 84)):
+            fast = mujoco_camera(rig.data.cam_xpos[i], rig.data.cam_xmat[i], 55.0, w, h, 0.02)
+            slow = ms.Camera.from_mujoco(rig.data.cam_xpos[i], rig.data.cam_xmat[i], 55.0, w, h, near=0.02)
+            assert fast == slow and repr(fast) == repr(slow)
+            assert not fast.world_to_camera.flags.writeable
+
+
 def test_arm_scaling_sets_the_reach_and_the_ready_pose_is_raised():
     for reach in (0.3, 3.0):
         arm = ArmRig()
