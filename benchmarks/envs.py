@@ -4,7 +4,7 @@
     python benchmarks/envs.py --ids MorphoSim/Track-v0 --repeats 5 --breakdown
 
 Every number is the median of `--repeats` runs (the machine is shared and noisy; the
-spread is reported too). Settings: default env arguments (84x84 rgb, detail 0.5, 10 Hz)
+spread is reported too). Settings: default env arguments (84x84 rgb, detail 0.35, 10 Hz)
 plus `scene_pool=8`, random actions, autoreset included (episodes are 60 steps, or shorter
 for Reach/Find when they succeed). Modes:
 

@@ -13,11 +13,12 @@ from __future__ import annotations
 
 from typing import Any
 
+import numba
 import numpy as np
 
 from ..generate.parts import AMBIENT, DIFFUSE, LIGHT_DIR, Part, parts_to_gaussians
 from ..scene.gaussians import Gaussians
-from ..scene.rotations import matrix_to_quat, quat_multiply, quat_to_matrix
+from ..scene.rotations import quat_to_matrix
 
 __all__ = ["AgentSkin", "geom_part"]
 
@@ -120,19 +121,69 @@ class AgentSkin:
             Gaussians with means [M, 3], quats [M, 4], scales [M, 3], opacities [M], colors [M, 3]
             and object_ids [M] (all `object_id`).
         """
-        g = self._geom_of
-        rot = np.asarray(data.geom_xmat, dtype=np.float64).reshape(-1, 3, 3)
-        pos = np.asarray(data.geom_xpos, dtype=np.float64)
-        r = rot[g]                                                 # [M, 3, 3]
-        means = np.einsum("mij,mj->mi", r, self._means * scale) + pos[g]
-        geom_q = matrix_to_quat(rot[self.geom_ids])                # [G', 4] for the drawn geoms only
-        lookup = np.zeros((rot.shape[0], 4))
-        lookup[self.geom_ids] = geom_q
-        quats = quat_multiply(lookup[g], self._quats)
-        normals = np.einsum("mij,mj->mi", r, self._normals)
-        light = AMBIENT + DIFFUSE * np.clip(normals @ LIGHT_DIR, 0.0, 1.0)
-        colors = np.clip(self._albedo * light[:, None], 0.0, 1.0)
-        return Gaussians._trusted(means=means.astype(np.float32), quats=quats.astype(np.float32),
-                                  scales=self._scales * np.float32(scale), opacities=self._opacities,
-                                  colors=colors.astype(np.float32), features=None, object_ids=self._ids)
+        rot = np.ascontiguousarray(data.geom_xmat, dtype=np.float64).reshape(-1, 3, 3)
+        pos = np.ascontiguousarray(data.geom_xpos, dtype=np.float64)
+        m = len(self._means)
+        means = np.empty((m, 3), np.float32)
+        quats = np.empty((m, 4), np.float32)
+        colors = np.empty((m, 3), np.float32)
+        _pose_kernel(self._geom_of, self._means, self._quats, self._normals, self._albedo, rot, pos, float(scale),
+                     LIGHT_DIR, AMBIENT, DIFFUSE, means, quats, colors)
+        return Gaussians._trusted(means=means, quats=quats, scales=self._scales * np.float32(scale),
+                                  opacities=self._opacities, colors=colors, features=None, object_ids=self._ids)
 
+
+@numba.njit(cache=True, nogil=True)
+def _pose_kernel(geom_of, local_means, local_quats, local_normals, albedo, rot, pos, scale, light, ambient, diffuse,
+                 out_means, out_quats, out_colors):  # pragma: no cover - compiled
+    """World means, quats and lit colours of skin Gaussians from their geoms' poses."""
+    g_count = rot.shape[0]
+    gq = np.zeros((g_count, 4))
+    for g in range(g_count):                      # rotation matrix -> quaternion (w, x, y, z), per geom
+        r = rot[g]
+        tr = r[0, 0] + r[1, 1] + r[2, 2]
+        if tr > 0.0:
+            s = np.sqrt(tr + 1.0) * 2.0
+            gq[g, 0] = 0.25 * s
+            gq[g, 1] = (r[2, 1] - r[1, 2]) / s
+            gq[g, 2] = (r[0, 2] - r[2, 0]) / s
+            gq[g, 3] = (r[1, 0] - r[0, 1]) / s
+        elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+            s = np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2.0
+            gq[g, 0] = (r[2, 1] - r[1, 2]) / s
+            gq[g, 1] = 0.25 * s
+            gq[g, 2] = (r[0, 1] + r[1, 0]) / s
+            gq[g, 3] = (r[0, 2] + r[2, 0]) / s
+        elif r[1, 1] > r[2, 2]:
+            s = np.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2.0
+            gq[g, 0] = (r[0, 2] - r[2, 0]) / s
+            gq[g, 1] = (r[0, 1] + r[1, 0]) / s
+            gq[g, 2] = 0.25 * s
+            gq[g, 3] = (r[1, 2] + r[2, 1]) / s
+        else:
+            s = np.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2.0
+            gq[g, 0] = (r[1, 0] - r[0, 1]) / s
+            gq[g, 1] = (r[0, 2] + r[2, 0]) / s
+            gq[g, 2] = (r[1, 2] + r[2, 1]) / s
+            gq[g, 3] = 0.25 * s
+    for i in range(local_means.shape[0]):
+        g = geom_of[i]
+        r = rot[g]
+        x = local_means[i, 0] * scale
+        y = local_means[i, 1] * scale
+        z = local_means[i, 2] * scale
+        for k in range(3):
+            out_means[i, k] = r[k, 0] * x + r[k, 1] * y + r[k, 2] * z + pos[g, k]
+        aw, ax, ay, az = gq[g, 0], gq[g, 1], gq[g, 2], gq[g, 3]
+        bw, bx, by, bz = local_quats[i, 0], local_quats[i, 1], local_quats[i, 2], local_quats[i, 3]
+        out_quats[i, 0] = aw * bw - ax * bx - ay * by - az * bz
+        out_quats[i, 1] = aw * bx + ax * bw + ay * bz - az * by
+        out_quats[i, 2] = aw * by - ax * bz + ay * bw + az * bx
+        out_quats[i, 3] = aw * bz + ax * by - ay * bx + az * bw
+        lam = 0.0
+        for k in range(3):
+            lam += (r[k, 0] * local_normals[i, 0] + r[k, 1] * local_normals[i, 1] + r[k, 2] * local_normals[i, 2]) \
+                * light[k]
+        shade = ambient + diffuse * min(max(lam, 0.0), 1.0)
+        for k in range(3):
+            out_colors[i, k] = min(max(albedo[i, k] * shade, 0.0), 1.0)

@@ -191,3 +191,23 @@ def test_third_person_camera_sees_the_arm():
     np.testing.assert_allclose(seen.world_to_camera, cam.world_to_camera, atol=1e-9)
     out = ms.render(arm.gaussians(), seen)
     assert np.count_nonzero(out.instance == AGENT_OBJECT_ID) > 50
+
+
+def test_skin_kernel_matches_a_numpy_reference():
+    from morphosim_gym.generate.parts import AMBIENT, DIFFUSE, LIGHT_DIR
+    from morphosim_gym.scene.rotations import matrix_to_quat, quat_multiply
+
+    arm = ArmRig()
+    arm.place((0.2, 0.1, 0.0), (0, -1, 0), reach=0.7)
+    arm.set_joints([0.4, 0.8, -1.1, 2.0, 0.3, -2.5])
+    arm.forward()
+    skin = AgentSkin(arm.model, geom_size=arm._nominal["geom_size"])
+    g = skin.gaussians(arm.data, arm.scale)
+    rot = arm.data.geom_xmat.reshape(-1, 3, 3)[skin._geom_of]
+    means = np.einsum("mij,mj->mi", rot, skin._means * arm.scale) + arm.data.geom_xpos[skin._geom_of]
+    quats = quat_multiply(matrix_to_quat(rot), skin._quats)
+    quats *= np.sign(np.sum(quats * g.quats, axis=1, keepdims=True))      # q and -q are one rotation
+    light = AMBIENT + DIFFUSE * np.clip(np.einsum("mij,mj->mi", rot, skin._normals) @ LIGHT_DIR, 0, 1)
+    np.testing.assert_allclose(g.means, means, atol=1e-5)
+    np.testing.assert_allclose(g.quats, quats, atol=1e-5)
+    np.testing.assert_allclose(g.colors, np.clip(skin._albedo * light[:, None], 0, 1), atol=1e-5)
