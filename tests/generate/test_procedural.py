@@ -18,7 +18,7 @@ PROMPT = "A small, vibrant red rubber ball is bouncing from right to left"
 
 @pytest.fixture(scope="module")
 def sim():
-    return ms.MorphoSim(generation=SMALL)
+    return ms.MorphoSim(generation=SMALL, reconstruction="oracle")
 
 
 def test_same_prompt_and_seed_give_a_bit_identical_clip(sim):
