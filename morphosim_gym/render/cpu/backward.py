@@ -32,6 +32,7 @@ from numba import prange
 
 from ._jit import (ALPHA_MAX, ALPHA_MIN, R_B, R_CA, R_CB, R_CC, R_G, R_MX, R_MY, R_OP, R_R, R_X0, R_X1, R_Y0,
                    R_Y1, R_Z, splat_exp)
+from .binning import argsort_int
 
 __all__ = ["raster_backward", "G_MX", "G_MY", "G_CA", "G_CB", "G_CC", "G_OP", "G_Z", "G_R", "G_G", "G_B", "NGRAD"]
 
@@ -138,7 +139,7 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
                 lastp[p] = lp
                 kend = max(kend, lp)
         # pixels ordered by their stop position, to clear their active bits as k passes it
-        order[:] = np.argsort(lastp)
+        argsort_int(lastp, order)
         for ly in range(16):
             rowbits[ly] = 0
         nev = 0
