@@ -22,6 +22,9 @@ from .projection import project_backward
 
 __all__ = ["rasterize_cpu"]
 
+#: optional `pipeline.StageTimer` collecting per-stage times (set by benchmarks/render.py)
+_STAGE_TIMER = None
+
 
 def _np(t: torch.Tensor) -> np.ndarray:
     return t.detach().contiguous().numpy()
@@ -43,7 +46,8 @@ class _RasterizeCPU(torch.autograd.Function):
         states = []
         for ci in range(C):
             states.append(render_camera(m, q, s, o, c, f, ids, viewmats[ci], Ks[ci], float(nears[ci]), width, height,
-                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=True))
+                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=True,
+                                        timer=_STAGE_TIMER))
         outs = [torch.from_numpy(x) for x in (rgb, depth, alpha, inst, fout)]
         ctx.mark_non_differentiable(outs[3])
         ctx.states = states
@@ -77,15 +81,22 @@ class _RasterizeCPU(torch.autograd.Function):
         go = np.zeros(N, npdt)
         gc = np.zeros((N, 3), npdt)
         gf = np.zeros((N, D), npdt)
+        timer = _STAGE_TIMER
         for ci, st in enumerate(ctx.states):
+            if timer:
+                timer.start()
             nthr = st.assign.shape[0]
             grad2d = np.zeros((nthr, N, NGRAD), npdt)
             gfeat2d = np.zeros((nthr, N, D), npdt)
             raster_backward(st.assign, st.nper, st.tile_start, st.lst, st.rec, f, width, height, st.tiles_x,
                             rgb[ci], depth[ci], fout[ci], st.tfinal, st.last, g_rgb[ci], g_depth[ci], g_alpha[ci],
                             g_feat[ci], grad2d, gfeat2d)
+            if timer:
+                timer.lap("bwd_raster")
             project_backward(m, q, s, viewmats[ci], Ks[ci], width, height, st.rec, grad2d, gfeat2d,
                              gm, gq, gs, go, gc, gf)
+            if timer:
+                timer.lap("bwd_project")
         grads = [torch.from_numpy(x) for x in (gm, gq, gs, go, gc, gf)]
         needs = ctx.needs_input_grad
         grads = [g if needs[k] else None for k, g in enumerate(grads)]
