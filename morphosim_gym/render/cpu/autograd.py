@@ -17,7 +17,7 @@ import numpy as np
 import torch
 
 from .backward import NGRAD, raster_backward
-from .pipeline import render_camera
+from .pipeline import _workspace, render_camera
 from .projection import project_backward
 
 __all__ = ["rasterize_cpu"]
@@ -43,11 +43,13 @@ class _RasterizeCPU(torch.autograd.Function):
         alpha = np.empty((C, height, width), npdt)
         inst = np.empty((C, height, width), np.int32)
         fout = np.empty((C, height, width, D), npdt)
+        save = any(ctx.needs_input_grad[:6])   # no input needs a gradient: forward only, reuse scratch
+        ws = None if save else _workspace()
         states = []
         for ci in range(C):
             states.append(render_camera(m, q, s, o, c, f, ids, viewmats[ci], Ks[ci], float(nears[ci]), width, height,
-                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=True,
-                                        timer=_STAGE_TIMER))
+                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=save,
+                                        timer=_STAGE_TIMER, ws=ws))
         outs = [torch.from_numpy(x) for x in (rgb, depth, alpha, inst, fout)]
         ctx.mark_non_differentiable(outs[3])
         ctx.states = states

@@ -7,6 +7,7 @@ backward pass needs (`FrameState`).
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass
@@ -20,7 +21,7 @@ from .binning import bin_fill, bin_offsets, plan_tiles
 from .forward import raster_forward
 from .projection import project_forward
 
-__all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer"]
+__all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer", "Workspace"]
 
 _KEY_DTYPE = {np.dtype(np.float32): np.uint32, np.dtype(np.float64): np.uint64}
 _MAX_TILE_LIST = {np.dtype(np.float32): 1 << 24, np.dtype(np.float64): 1 << 53}
@@ -46,6 +47,42 @@ class FrameState:
     last: Optional[np.ndarray]
 
 
+class Workspace:
+    """Scratch buffers reused across calls (grow-only), so that a steady stream of frames does
+    not pay page faults on megabytes of fresh memory each frame. One per Python thread."""
+
+    def __init__(self) -> None:
+        self._bufs: dict[str, np.ndarray] = {}
+        self._views: dict[tuple, np.ndarray] = {}
+
+    def get(self, name: str, shape: tuple, dtype) -> np.ndarray:
+        key = (name, shape, dtype)
+        view = self._views.get(key)
+        if view is not None:
+            return view
+        size = math.prod(shape)
+        dt = np.dtype(dtype)
+        buf = self._bufs.get(name)
+        if buf is None or buf.dtype != dt or buf.size < size:
+            buf = np.empty(max(size + size // 4, 16), dt)
+            self._bufs[name] = buf
+            self._views = {k: v for k, v in self._views.items() if k[0] != name}
+        if len(self._views) > 64:
+            self._views.clear()
+        view = self._views[key] = buf[:size].reshape(shape)
+        return view
+
+
+_LOCAL = threading.local()
+
+
+def _workspace() -> Workspace:
+    ws = getattr(_LOCAL, "ws", None)
+    if ws is None:
+        ws = _LOCAL.ws = Workspace()
+    return ws
+
+
 class StageTimer:
     """Accumulates wall time per stage (only when passed to `render_camera`)."""
 
@@ -68,8 +105,15 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
                   near: float, width: int, height: int,
                   bg,        # [3]
                   rgb, depth, alpha, inst, feat_out,   # output views for this camera
-                  save: bool = False, timer: Optional[StageTimer] = None) -> Optional[FrameState]:
-    """Render one camera into the given output views; with `save`, return the backward state."""
+                  save: bool = False, timer: Optional[StageTimer] = None,
+                  ws: Optional[Workspace] = None) -> Optional[FrameState]:
+    """Render one camera into the given output views; with `save`, return the backward state.
+
+    Scratch comes from `ws` when given (forward-only use), else is freshly allocated (the
+    backward pass keeps it).
+    """
+    if ws is None:
+        ws = Workspace()
     dtype = means.dtype
     F = dtype.type
     n = means.shape[0]
@@ -79,19 +123,19 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     ntiles = tiles_x * tiles_y
     if timer:
         timer.start()
-    rec = np.empty((n, NREC), dtype)
-    trect = np.empty((4, n), np.int32)
-    counts = np.empty((nthr, ntiles), np.int32)
+    rec = ws.get("rec", (n, NREC), dtype)
+    trect = ws.get("trect", (4, n), np.int32)
+    counts = ws.get("counts", (nthr, ntiles), np.int32)
     project_forward(means, quats, scales, opacities, colors, viewmat, K, width, height, F(near),
                     rec, trect, tiles_x, counts)
     if timer:
         timer.lap("project")
-    tile_start = np.empty(ntiles + 1, np.int64)
-    thread_off = np.empty((nthr, ntiles), np.int64)
+    tile_start = ws.get("tile_start", (ntiles + 1,), np.int64)
+    thread_off = ws.get("thread_off", (nthr, ntiles), np.int64)
     total = bin_offsets(counts, tile_start, thread_off)
-    lst = np.empty(total, np.int32)
+    lst = ws.get("lst", (total,), np.int32)
     bin_fill(trect, tiles_x, thread_off, lst)
-    assign = np.empty((nthr, ntiles), np.int32)
+    assign = ws.get("assign", (nthr, ntiles), np.int32)
     nper, max_len = plan_tiles(tile_start, nthr, assign)
     if max_len >= _MAX_TILE_LIST[dtype]:
         raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
@@ -100,10 +144,10 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
         timer.lap("bin")
     kd = _KEY_DTYPE[dtype]
     m = max(int(max_len), 1)
-    keys = np.empty((nthr, m), kd)
-    keys2 = np.empty((nthr, m), kd)
-    idx = np.empty((nthr, m), np.int32)
-    idx2 = np.empty((nthr, m), np.int32)
+    keys = ws.get("keys", (nthr, m), kd)
+    keys2 = ws.get("keys2", (nthr, m), kd)
+    idx = ws.get("idx", (nthr, m), np.int32)
+    idx2 = ws.get("idx2", (nthr, m), np.int32)
     if save:
         tfinal = np.empty((height, width), dtype)
         last = np.empty((height, width), np.int32)
@@ -189,8 +233,9 @@ def rasterize_numpy(means,        # [N, 3]
     alpha = np.empty((C, height, width), np.float32)
     inst = np.empty((C, height, width), np.int32)
     fout = np.empty((C, height, width, D), np.float32)
+    ws = _workspace()
     for c in range(C):
         render_camera(means, quats, scales, opacities, colors, feat, ids, viewmats[c], Ks[c], float(near[c]),
-                      width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer)
+                      width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer, ws=ws)
     return {"rgb": rgb, "depth": depth, "alpha": alpha, "instance": inst,
             "features": fout if features is not None else None}
