@@ -170,7 +170,9 @@ def _project_block(lo, hi,
                    width, height, near,
                    buf,         # [_NFIELD * _BLOCK] scratch
                    rec,         # [N, 16] out
-                   trect):      # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
+                   trect,       # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
+                   tiles_x,
+                   counts):     # [n_tiles] int32 out (+=)
     n = hi - lo
     B = _BLOCK
     for j in range(n):
@@ -210,19 +212,14 @@ def _project_block(lo, hi,
         rec[i, R_Y0] = by0
         rec[i, R_Y1] = by1
         # tile rectangle (inclusive); culled Gaussians get x1 = -1 < x0 = 0
-        trect[0, i] = np.int32(bx0) >> np.int32(4)
-        trect[1, i] = np.int32(bx1) >> np.int32(4)
-        trect[2, i] = np.int32(by0) >> np.int32(4)
-        trect[3, i] = np.int32(by1) >> np.int32(4)
-
-
-@jit
-def _count_block(lo, hi, trect, tiles_x, counts):
-    for i in range(lo, hi):
-        tx0 = trect[0, i]
-        tx1 = trect[1, i]
-        ty0 = trect[2, i]
-        ty1 = trect[3, i]
+        tx0 = np.int32(bx0) >> np.int32(4)
+        tx1 = np.int32(bx1) >> np.int32(4)
+        ty0 = np.int32(by0) >> np.int32(4)
+        ty1 = np.int32(by1) >> np.int32(4)
+        trect[0, i] = tx0
+        trect[1, i] = tx1
+        trect[2, i] = ty0
+        trect[3, i] = ty1
         if tx1 < tx0:
             continue
         if tx0 == tx1 and ty0 == ty1:   # single tile: the common case
@@ -241,8 +238,7 @@ def _project_range(lo, hi, means, quats, scales, opacities, colors, viewmat, K, 
     for b in range(lo, hi, _BLOCK):
         e = min(b + _BLOCK, hi)
         _project_block(b, e, means, quats, scales, opacities, colors, viewmat, K, width, height, near, buf, rec,
-                       trect)
-        _count_block(b, e, trect, tiles_x, counts)
+                       trect, tiles_x, counts)
 
 
 @pjit
