@@ -108,10 +108,13 @@ def bin_fill(trect,       # [4, N] int32
 @jit
 def plan_tiles(tile_start,  # [n_tiles + 1] int64
                nthr,
+               order_out,   # [n_tiles] int32 out: tiles by decreasing list length
                assign):     # [n_threads, n_tiles] int32 out
-    """Split the tiles between threads, longest list first to the least loaded thread.
+    """Order the tiles longest list first (the forward pass claims them in that order) and split
+    them statically between threads, each next tile to the least loaded thread (the backward
+    pass uses this fixed split so that its per-thread gradient sums are deterministic).
 
-    Returns (n_per_thread [n_threads] int64, longest list length). Thread k renders tiles
+    Returns (n_per_thread [n_threads] int64, longest list length). Thread k's static share is
     assign[k, :n_per_thread[k]].
     """
     ntiles = tile_start.shape[0] - 1
@@ -130,6 +133,7 @@ def plan_tiles(tile_start,  # [n_tiles + 1] int64
     maxlen = 0
     for q in range(ntiles):
         t = order[q]
+        order_out[q] = t
         best = 0
         for k in range(1, nthr):
             if load[k] < load[best]:

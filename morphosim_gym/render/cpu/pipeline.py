@@ -136,7 +136,8 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     lst = ws.get("lst", (total,), np.int32)
     bin_fill(trect, tiles_x, thread_off, lst)
     assign = ws.get("assign", (nthr, ntiles), np.int32)
-    nper, max_len = plan_tiles(tile_start, nthr, assign)
+    order = ws.get("order", (ntiles,), np.int32)
+    nper, max_len = plan_tiles(tile_start, nthr, order, assign)
     if max_len >= _MAX_TILE_LIST[dtype]:
         raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
                          f"{dtype.name}, found {max_len} (list positions are kept as floats)")
@@ -154,8 +155,8 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     else:
         tfinal = _DUMMY_F[dtype]
         last = _DUMMY_I
-    raster_forward(assign, nper, tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
-                   rgb, depth, alpha, inst, feat_out, tfinal, last, save, keys, keys2, idx, idx2)
+    raster_forward(order, ws.get("claim", (1,), np.int64), keys, keys2, idx, idx2, tile_start, lst, rec, ids, feat,
+                   width, height, tiles_x, bg, rgb, depth, alpha, inst, feat_out, tfinal, last, save)
     if timer:
         timer.lap("raster")
     if not save:
