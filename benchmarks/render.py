@@ -200,6 +200,48 @@ def mujoco_xml(seed: int = 0) -> str:
 </mujoco>"""
 
 
+# ----------------------------------------------------------------------------- machine load
+def _cpu_ticks() -> tuple[int, int, float] | None:
+    """(total, idle, own) CPU ticks from /proc/stat and os.times (Linux), or None."""
+    try:
+        with open("/proc/stat") as f:
+            vals = [int(v) for v in f.readline().split()[1:9]]
+        t = os.times()
+        return sum(vals), vals[3] + vals[4], (t.user + t.system + t.children_user + t.children_system) \
+            * os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError):
+        return None
+
+
+def _other_load(a, b) -> float | None:
+    """Share of all cores used by other processes between two `_cpu_ticks` snapshots."""
+    if a is None or b is None or b[0] <= a[0]:
+        return None
+    busy = (b[0] - a[0]) - (b[1] - a[1])
+    return max(0.0, (busy - (b[2] - a[2])) / (b[0] - a[0]))
+
+
+def wait_quiet(max_wait_s: float, need_s: float = 2.0, threshold: float = 0.08) -> float:
+    """Wait (at most max_wait_s) until other processes used < threshold of the CPUs for need_s
+    seconds in a row; returns the seconds waited. The machine is shared: a parallel frame waits
+    for its slowest thread, so one busy core from another process can halve a measurement."""
+    t0 = time.perf_counter()
+    quiet_since = None
+    while time.perf_counter() - t0 < max_wait_s:
+        a = _cpu_ticks()
+        time.sleep(0.5)
+        load = _other_load(a, _cpu_ticks())
+        if load is None:
+            return 0.0
+        if load < threshold:
+            quiet_since = quiet_since or time.perf_counter()
+            if time.perf_counter() - quiet_since >= need_s:
+                break
+        else:
+            quiet_since = None
+    return time.perf_counter() - t0
+
+
 # ----------------------------------------------------------------------------- timing helpers
 def _block_median(times: list[float], blocks: int = 3) -> tuple[float, float, float]:
     """(median of block medians, min, max of block medians) in seconds."""
@@ -224,11 +266,13 @@ def bench_forward(scene: dict, res: int, frames: int, warmup: int = 5) -> dict:
         vm, K = _cam_arrays(k, res)
         rasterize_numpy(*args, vm, K, res, res, object_ids=ids)
     times = []
+    a = _cpu_ticks()
     for k in range(frames):
         vm, K = _cam_arrays(warmup + k, res)
         t = time.perf_counter()
         rasterize_numpy(*args, vm, K, res, res, object_ids=ids)
         times.append(time.perf_counter() - t)
+    load = _other_load(a, _cpu_ticks())
     med, lo, hi = _block_median(times)
     timer = StageTimer()                                   # stage split, on separate frames
     nstage = max(3, frames // 4)
@@ -240,9 +284,13 @@ def bench_forward(scene: dict, res: int, frames: int, warmup: int = 5) -> dict:
     out = rasterize_numpy(*args, vm, K, res, res, object_ids=ids)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
+    from morphosim_gym.render.cpu.pipeline import _workspace
+
+    ws_mb = sum(b.nbytes for b in _workspace()._bufs.values()) / 2 ** 20
     return {"ms": med * 1e3, "fps": 1.0 / med, "fps_block_range": [1.0 / hi, 1.0 / lo], "frames": frames,
             "stages_ms": {k: v / nstage * 1e3 for k, v in timer.totals.items()},
-            "alloc_peak_mb": peak / 2 ** 20, "alpha_mean": float(out["alpha"].mean())}
+            "alloc_peak_mb": peak / 2 ** 20, "workspace_mb": ws_mb, "other_load": load,
+            "alpha_mean": float(out["alpha"].mean())}
 
 
 def bench_forward_backward(scene: dict, res: int, iters: int, warmup: int = 3) -> dict:
@@ -272,10 +320,15 @@ def bench_forward_backward(scene: dict, res: int, iters: int, warmup: int = 3) -
     for k in range(warmup):
         step(k)
     times = []
+    tracemalloc.start()
+    a = _cpu_ticks()
     for k in range(iters):
         t = time.perf_counter()
         step(warmup + k)
         times.append(time.perf_counter() - t)
+    load = _other_load(a, _cpu_ticks())
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
     med, lo, hi = _block_median(times)
     timer = StageTimer()
     cpu_autograd._STAGE_TIMER = timer
@@ -286,7 +339,8 @@ def bench_forward_backward(scene: dict, res: int, iters: int, warmup: int = 3) -
     finally:
         cpu_autograd._STAGE_TIMER = None
     return {"ms": med * 1e3, "its": 1.0 / med, "its_block_range": [1.0 / hi, 1.0 / lo], "iters": iters,
-            "stages_ms": {k: v / nstage * 1e3 for k, v in timer.totals.items()}}
+            "stages_ms": {k: v / nstage * 1e3 for k, v in timer.totals.items()}, "other_load": load,
+            "alloc_peak_mb": peak / 2 ** 20}
 
 
 def bench_torch_reference(scene: dict, res: int, frames: int) -> dict:
@@ -296,6 +350,7 @@ def bench_torch_reference(scene: dict, res: int, frames: int) -> dict:
 
     t = {k: torch.from_numpy(scene[k]) for k in scene}
     times = []
+    a = _cpu_ticks()
     with torch.no_grad():
         for k in range(frames):
             vm, K = _cam_arrays(k, res)
@@ -305,7 +360,7 @@ def bench_torch_reference(scene: dict, res: int, frames: int) -> dict:
                             object_ids=t["object_ids"])
             times.append(time.perf_counter() - s)
     med = float(np.median(times))
-    return {"ms": med * 1e3, "fps": 1.0 / med, "frames": frames}
+    return {"ms": med * 1e3, "fps": 1.0 / med, "frames": frames, "other_load": _other_load(a, _cpu_ticks())}
 
 
 def bench_mujoco(res: int, frames: int, warmup: int = 3) -> dict:
@@ -320,6 +375,7 @@ def bench_mujoco(res: int, frames: int, warmup: int = 3) -> dict:
     cam.lookat[:] = CAM_TARGET
     cam.distance = CAM_DISTANCE
     cam.elevation = -CAM_PITCH_DEG
+    a = _cpu_ticks()
     try:
         times = []
         for k in range(warmup + frames):
@@ -332,7 +388,7 @@ def bench_mujoco(res: int, frames: int, warmup: int = 3) -> dict:
     finally:
         renderer.close()
     med, lo, hi = _block_median(times)
-    return {"ms": med * 1e3, "fps": 1.0 / med, "frames": frames}
+    return {"ms": med * 1e3, "fps": 1.0 / med, "frames": frames, "other_load": _other_load(a, _cpu_ticks())}
 
 
 _JIT_PROBE = r"""
@@ -394,7 +450,15 @@ def main(argv=None) -> dict:
     ap.add_argument("--json", type=Path, default=None, help="write results to this JSON file")
     ap.add_argument("--no-jit", action="store_true", help="skip the cold/warm JIT subprocess probes")
     ap.add_argument("--no-yardsticks", action="store_true", help="skip MuJoCo and the torch reference")
+    ap.add_argument("--max-wait", type=float, default=60.0,
+                    help="before each case wait up to this many seconds for other processes to go idle "
+                         "(0: never wait); the load seen during each case is reported either way")
     args = ap.parse_args(argv)
+    waited = []
+
+    def settle():
+        if args.max_wait > 0:
+            waited.append(wait_quiet(args.max_wait))
 
     import numba
 
@@ -422,6 +486,7 @@ def main(argv=None) -> dict:
 
     for (kind, n), scene in scenes.items():
         for res in resolutions:
+            settle()
             r = bench_forward(scene, res, fwd_frames)
             results["forward"].append(dict(scene=kind, n=n, res=res, **r))
             print(f"forward  {kind:12s} N={n:>7,d} {res:>3d}px  {r['fps']:7.1f} FPS  ({r['ms']:.2f} ms; "
@@ -430,6 +495,7 @@ def main(argv=None) -> dict:
                 results["machine"]["threading_layer"] = numba.threading_layer()
             if quick and n == 200_000:
                 continue
+            settle()
             r = bench_forward_backward(scene, res, fb_iters if n < 200_000 else max(fb_iters // 2, 5))
             results["forward_backward"].append(dict(scene=kind, n=n, res=res, **r))
             print(f"fwd+bwd  {kind:12s} N={n:>7,d} {res:>3d}px  {r['its']:7.1f} it/s ({r['ms']:.2f} ms; "
@@ -438,6 +504,7 @@ def main(argv=None) -> dict:
     if not args.no_yardsticks:
         for res in resolutions:
             try:
+                settle()
                 r = bench_mujoco(res, 20 if quick else 60)
                 results["mujoco"].append(dict(res=res, **r))
                 print(f"mujoco.Renderer        {res:>3d}px  {r['fps']:7.1f} FPS", flush=True)
@@ -446,6 +513,7 @@ def main(argv=None) -> dict:
                 print(f"mujoco.Renderer        {res:>3d}px  unavailable: {type(e).__name__}: {e}", flush=True)
         for n in (10_000, 50_000):
             for res in resolutions:
+                settle()
                 r = bench_torch_reference(scenes[("surface", n)], res, 2 if quick else 3)
                 results["torch_reference"].append(dict(scene="surface", n=n, res=res, **r))
                 print(f"torch reference surface N={n:>7,d} {res:>3d}px  {r['fps']:7.3f} FPS ({r['frames']} frames)",
@@ -481,6 +549,7 @@ def main(argv=None) -> dict:
                          "got": row["vs_torch_reference"], "met": row["vs_torch_reference"] >= 30})
     results["bars"] = bars
     results["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    results["settings"]["waited_for_quiet_s"] = float(sum(waited))
 
     _print_tables(results)
     if args.json:
@@ -490,7 +559,13 @@ def main(argv=None) -> dict:
     return results
 
 
+def _busy(r: dict) -> str:
+    load = r.get("other_load")
+    return "*" if load is not None and load > 0.1 else " "
+
+
 def _print_tables(results: dict) -> None:
+    print("\n(* = other processes used > 10% of the CPUs during that measurement: treat as a lower bound)")
     print("\n== forward (rasterize_numpy: rgb + depth + alpha + instance), FPS  [block range] ==")
     print(f"{'scene':14s} {'N':>8s} " + " ".join(f"{r:>22d}px" for r in (64, 128, 256)))
     rows: dict = {}
@@ -498,8 +573,8 @@ def _print_tables(results: dict) -> None:
         rows.setdefault((r["scene"], r["n"]), {})[r["res"]] = r
     for (scene, n), by in rows.items():
         cells = [f"{by[res]['fps']:7.1f} [{by[res]['fps_block_range'][0]:6.1f},{by[res]['fps_block_range'][1]:6.1f}]"
-                 if res in by else "-" for res in (64, 128, 256)]
-        print(f"{scene:14s} {n:>8,d} " + " ".join(f"{c:>24s}" for c in cells))
+                 + _busy(by[res]) if res in by else "-" for res in (64, 128, 256)]
+        print(f"{scene:14s} {n:>8,d} " + " ".join(f"{c:>25s}" for c in cells))
     print("\n== per-stage forward ms (project / bin / raster incl. sort) ==")
     for (scene, n), by in rows.items():
         print(f"{scene:14s} {n:>8,d} " + "  ".join(
@@ -510,7 +585,7 @@ def _print_tables(results: dict) -> None:
         for r in results["forward_backward"]:
             rows.setdefault((r["scene"], r["n"]), {})[r["res"]] = r
         for (scene, n), by in rows.items():
-            cells = [f"{by[res]['its']:7.1f}" if res in by else "-" for res in (64, 128, 256)]
+            cells = [f"{by[res]['its']:7.1f}" + _busy(by[res]) if res in by else "-" for res in (64, 128, 256)]
             stages = "  ".join(f"{res}px: " + ", ".join(f"{k} {v:.2f}" for k, v in by[res]["stages_ms"].items())
                                for res in sorted(by))
             print(f"{scene:14s} {n:>8,d} " + " ".join(f"{c:>10s}" for c in cells) + f"   [{stages}]")
@@ -518,9 +593,9 @@ def _print_tables(results: dict) -> None:
         print("\n== yardsticks (same run) ==")
         for r in results["mujoco"]:
             print(f"mujoco.Renderer (EGL)  {r['res']:>3d}px  "
-                  + (f"{r['fps']:7.1f} FPS" if "fps" in r else r.get("error", "")))
+                  + (f"{r['fps']:7.1f} FPS" + _busy(r) if "fps" in r else r.get("error", "")))
         for r in results["torch_reference"]:
-            print(f"torch reference        {r['res']:>3d}px N={r['n']:>7,d}  {r['fps']:7.3f} FPS "
+            print(f"torch reference        {r['res']:>3d}px N={r['n']:>7,d}  {r['fps']:7.3f} FPS{_busy(r)}"
                   f"(median of {r['frames']} frames)")
         print("\n== speedups of the CPU kernels (forward, surface scene) ==")
         for r in results["speedups"]:
@@ -538,7 +613,11 @@ def _print_tables(results: dict) -> None:
     print("\n== memory ==")
     for r in results["forward"]:
         if r["res"] == 128:
-            print(f"forward {r['scene']:12s} N={r['n']:>7,d} 128px: numpy allocation peak {r['alloc_peak_mb']:.1f} MB")
+            print(f"forward {r['scene']:12s} N={r['n']:>7,d} 128px: scratch workspace {r['workspace_mb']:.1f} MB "
+                  f"(reused across frames), per-frame numpy allocation peak {r['alloc_peak_mb']:.1f} MB")
+    for r in results["forward_backward"]:
+        if r["res"] == 128:
+            print(f"fwd+bwd {r['scene']:12s} N={r['n']:>7,d} 128px: numpy allocation peak {r['alloc_peak_mb']:.1f} MB")
     print(f"process peak RSS {results['peak_rss_mb']:.0f} MB (includes torch, MuJoCo and all scenes)")
     print("\n== bars (issue #2) ==")
     for b in results["bars"]:
