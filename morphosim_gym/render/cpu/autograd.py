@@ -13,10 +13,11 @@ from __future__ import annotations
 
 from typing import Optional
 
+import numba
 import numpy as np
 import torch
 
-from .backward import NGRAD, raster_backward
+from .backward import NGRAD, raster_backward, reduce_entries
 from .pipeline import _workspace, render_camera
 from .projection import project_backward
 
@@ -84,18 +85,23 @@ class _RasterizeCPU(torch.autograd.Function):
         gc = np.zeros((N, 3), npdt)
         gf = np.zeros((N, D), npdt)
         timer = _STAGE_TIMER
+        nthr = numba.get_num_threads()
+        grad2d = np.empty((N, NGRAD), npdt)
+        gfeat2d = np.empty((N, D), npdt)
+        claim = np.zeros(1, np.int64)
         for ci, st in enumerate(ctx.states):
             if timer:
                 timer.start()
-            nthr = st.assign.shape[0]
-            grad2d = np.zeros((nthr, N, NGRAD), npdt)
-            gfeat2d = np.zeros((nthr, N, D), npdt)
-            raster_backward(st.assign, st.nper, st.tile_start, st.lst, st.rec, f, width, height, st.tiles_x,
+            total = st.lst.shape[0]
+            grad_e = np.empty((total, NGRAD), npdt)
+            gfeat_e = np.empty((total, D), npdt)
+            raster_backward(st.order, claim, nthr, st.tile_start, st.lst, st.rec, f, width, height, st.tiles_x,
                             rgb[ci], depth[ci], fout[ci], st.tfinal, st.last, g_rgb[ci], g_depth[ci], g_alpha[ci],
-                            g_feat[ci], grad2d, gfeat2d)
+                            g_feat[ci], grad_e, gfeat_e)
+            reduce_entries(nthr, st.lst, grad_e, gfeat_e, grad2d, gfeat2d)
             if timer:
                 timer.lap("bwd_raster")
-            project_backward(m, q, s, viewmats[ci], Ks[ci], width, height, st.rec, grad2d, gfeat2d,
+            project_backward(nthr, m, q, s, viewmats[ci], Ks[ci], width, height, st.rec, grad2d, gfeat2d,
                              gm, gq, gs, go, gc, gf)
             if timer:
                 timer.lap("bwd_project")

@@ -107,16 +107,9 @@ def bin_fill(trect,       # [4, N] int32
 
 @jit
 def plan_tiles(tile_start,  # [n_tiles + 1] int64
-               nthr,
-               order_out,   # [n_tiles] int32 out: tiles by decreasing list length
-               assign):     # [n_threads, n_tiles] int32 out
-    """Order the tiles longest list first (the forward pass claims them in that order) and split
-    them statically between threads, each next tile to the least loaded thread (the backward
-    pass uses this fixed split so that its per-thread gradient sums are deterministic).
-
-    Returns (n_per_thread [n_threads] int64, longest list length). Thread k's static share is
-    assign[k, :n_per_thread[k]].
-    """
+               order_out):  # [n_tiles] int32 out: tiles by decreasing list length
+    """Order the tiles longest list first: threads claim tiles in this order, so the long ones
+    start early and the short ones fill the gaps at the end. Returns the longest list length."""
     ntiles = tile_start.shape[0] - 1
     lengths = np.empty(ntiles, np.int64)
     longest = 0
@@ -124,26 +117,12 @@ def plan_tiles(tile_start,  # [n_tiles + 1] int64
         lengths[t] = tile_start[t + 1] - tile_start[t]
         longest = max(longest, lengths[t])
     order = np.empty(ntiles, np.int64)
-    rank = np.empty(ntiles, np.int64)
     for t in range(ntiles):
-        rank[t] = longest - lengths[t]
-    argsort_int(rank, order)   # longest first
-    load = np.zeros(nthr, np.int64)
-    nper = np.zeros(nthr, np.int64)
-    maxlen = 0
+        lengths[t] = longest - lengths[t]
+    argsort_int(lengths, order)   # longest first, ties in tile order
     for q in range(ntiles):
-        t = order[q]
-        order_out[q] = t
-        best = 0
-        for k in range(1, nthr):
-            if load[k] < load[best]:
-                best = k
-        # a little fixed cost per tile, so empty tiles spread too
-        load[best] += lengths[t] + 16
-        assign[best, nper[best]] = t
-        nper[best] += 1
-        maxlen = max(maxlen, lengths[t])
-    return nper, maxlen
+        order_out[q] = order[q]
+    return longest
 
 
 @jit

@@ -1,7 +1,7 @@
 """Per-camera orchestration of the forward kernels, and `rasterize_numpy` (the env hot path).
 
-One camera = project (parallel) -> bin offsets -> bin fill (parallel) -> plan threads ->
-sort + composite per tile (parallel). `render_camera` runs these stages and returns what the
+One camera = project (parallel) -> bin offsets -> bin fill (parallel) -> order the tiles ->
+sort + composite per tile (parallel, tiles claimed longest first). `render_camera` runs these stages and returns what the
 backward pass needs (`FrameState`).
 """
 
@@ -32,15 +32,14 @@ class FrameState:
     """What one camera's forward pass leaves for its backward pass.
 
     rec [N, 16] projected records; tile_start [n_tiles + 1] and lst [n_entries] the depth-sorted
-    per-tile lists; assign [n_threads, n_tiles] / nper [n_threads] the thread plan; tfinal [H, W]
-    final transmittance; last [H, W] int32 per-pixel stop position in its tile's list.
+    per-tile lists; order [n_tiles] the tiles longest list first; tfinal [H, W] final
+    transmittance; last [H, W] int32 per-pixel stop position in its tile's list.
     """
 
     rec: np.ndarray
     tile_start: np.ndarray
     lst: np.ndarray
-    assign: np.ndarray
-    nper: np.ndarray
+    order: np.ndarray
     max_len: int
     tiles_x: int
     tfinal: Optional[np.ndarray]
@@ -135,9 +134,8 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     total = bin_offsets(counts, tile_start, thread_off)
     lst = ws.get("lst", (total,), np.int32)
     bin_fill(trect, tiles_x, thread_off, lst)
-    assign = ws.get("assign", (nthr, ntiles), np.int32)
     order = ws.get("order", (ntiles,), np.int32)
-    nper, max_len = plan_tiles(tile_start, nthr, order, assign)
+    max_len = plan_tiles(tile_start, order)
     if max_len >= _MAX_TILE_LIST[dtype]:
         raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
                          f"{dtype.name}, found {max_len} (list positions are kept as floats)")
@@ -161,7 +159,7 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
         timer.lap("raster")
     if not save:
         return None
-    return FrameState(rec, tile_start, lst, assign, nper, int(max_len), tiles_x, tfinal, last)
+    return FrameState(rec, tile_start, lst, order, int(max_len), tiles_x, tfinal, last)
 
 
 _DUMMY_F = {np.dtype(np.float32): np.empty((1, 1), np.float32), np.dtype(np.float64): np.empty((1, 1), np.float64)}

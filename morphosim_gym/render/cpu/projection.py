@@ -276,8 +276,8 @@ def _project_backward_range(lo, hi,
                             K,          # [3, 3]
                             width, height,
                             rec,        # [N, 16] forward records (culled ones have X1 < X0)
-                            grad2d,     # [n_threads, N, 10] per-thread 2D gradients (backward.G_*)
-                            gfeat2d,    # [n_threads, N, D]
+                            grad2d,     # [N, 10] 2D gradients (columns backward.G_*)
+                            gfeat2d,    # [N, D]
                             g_means,    # [N, 3] out (+=)
                             g_quats,    # [N, 4] out (+=)
                             g_scales,   # [N, 3] out (+=)
@@ -285,8 +285,7 @@ def _project_backward_range(lo, hi,
                             g_colors,   # [N, 3] out (+=)
                             g_feat):    # [N, D] out (+=)
     F = rec.dtype.type
-    nthr = grad2d.shape[0]
-    D = gfeat2d.shape[2]
+    D = gfeat2d.shape[1]
     fx = K[0, 0]
     fy = K[1, 1]
     r00, r01, r02, t0 = viewmat[0, 0], viewmat[0, 1], viewmat[0, 2], viewmat[0, 3]
@@ -310,36 +309,18 @@ def _project_backward_range(lo, hi,
     for i in range(lo, hi):
         if rec[i, R_X1] < rec[i, R_X0]:
             continue   # culled: never rasterised, no gradient
-        gmx = zero
-        gmy = zero
-        gia = zero
-        gib = zero
-        gic = zero
-        gop = zero
-        gz = zero
-        gr = zero
-        gg = zero
-        gb = zero
-        for t in range(nthr):
-            gmx += grad2d[t, i, 0]
-            gmy += grad2d[t, i, 1]
-            gia += grad2d[t, i, 2]
-            gib += grad2d[t, i, 3]
-            gic += grad2d[t, i, 4]
-            gop += grad2d[t, i, 5]
-            gz += grad2d[t, i, 6]
-            gr += grad2d[t, i, 7]
-            gg += grad2d[t, i, 8]
-            gb += grad2d[t, i, 9]
-        g_opac[i] += gop
-        g_colors[i, 0] += gr
-        g_colors[i, 1] += gg
-        g_colors[i, 2] += gb
+        gmx = grad2d[i, 0]
+        gmy = grad2d[i, 1]
+        gia = grad2d[i, 2]
+        gib = grad2d[i, 3]
+        gic = grad2d[i, 4]
+        g_opac[i] += grad2d[i, 5]
+        gz = grad2d[i, 6]
+        g_colors[i, 0] += grad2d[i, 7]
+        g_colors[i, 1] += grad2d[i, 8]
+        g_colors[i, 2] += grad2d[i, 9]
         for d in range(D):
-            s = zero
-            for t in range(nthr):
-                s += gfeat2d[t, i, d]
-            g_feat[i, d] += s
+            g_feat[i, d] += gfeat2d[i, d]
         # ---- recompute the forward quantities (same formulas as _project_soa)
         m0 = means[i, 0]
         m1 = means[i, 1]
@@ -468,26 +449,25 @@ def _project_backward_range(lo, hi,
 
 
 @pjit
-def project_backward(means,      # [N, 3]
+def project_backward(nthr,
+                     means,      # [N, 3]
                      quats,      # [N, 4]
                      scales,     # [N, 3]
                      viewmat,    # [4, 4]
                      K,          # [3, 3]
                      width, height,
                      rec,        # [N, 16]
-                     grad2d,     # [n_threads, N, 10]
-                     gfeat2d,    # [n_threads, N, D]
+                     grad2d,     # [N, 10]
+                     gfeat2d,    # [N, D]
                      g_means,    # [N, 3] out (+=)
                      g_quats,    # [N, 4] out (+=)
                      g_scales,   # [N, 3] out (+=)
                      g_opac,     # [N] out (+=)
                      g_colors,   # [N, 3] out (+=)
                      g_feat):    # [N, D] out (+=)
-    """Chain the per-thread 2D gradients (mean2d, conic, opacity, depth, colour, features) of one
-    camera back to the 3D parameters, adding into the g_* arrays. Twin of autograd through
-    `project_torch`."""
+    """Chain one camera's 2D gradients (mean2d, conic, opacity, depth, colour, features) back to
+    the 3D parameters, adding into the g_* arrays. Twin of autograd through `project_torch`."""
     n = means.shape[0]
-    nthr = grad2d.shape[0]
     for t in prange(nthr):
         _project_backward_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, viewmat, K, width,
                                 height, rec, grad2d, gfeat2d, g_means, g_quats, g_scales, g_opac, g_colors, g_feat)
