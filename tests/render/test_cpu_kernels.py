@@ -27,8 +27,8 @@ def _project(scene, vm, K, W, H, near, nthr=2):
     rec = np.empty((n, _jit.NREC))
     trect = np.empty((4, n), np.int32)
     counts = np.empty((nthr, tiles_x * tiles_y), np.int32)
-    project_forward(f("means"), f("quats"), f("scales"), f("opacities"), f("colors"), vm, K, W, H, near, rec, trect,
-                    tiles_x, counts)
+    project_forward(f("means"), f("quats"), f("scales"), f("opacities"), f("colors"), np.zeros((n, 0)), vm, K, W, H,
+                    near, rec, trect, tiles_x, counts)
     return rec, trect, counts
 
 

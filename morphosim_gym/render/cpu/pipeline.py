@@ -125,7 +125,7 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     rec = ws.get("rec", (n, NREC), dtype)
     trect = ws.get("trect", (4, n), np.int32)
     counts = ws.get("counts", (nthr, ntiles), np.int32)
-    project_forward(means, quats, scales, opacities, colors, viewmat, K, width, height, F(near),
+    project_forward(means, quats, scales, opacities, colors, feat, viewmat, K, width, height, F(near),
                     rec, trect, tiles_x, counts)
     if timer:
         timer.lap("project")
@@ -166,10 +166,12 @@ _DUMMY_F = {np.dtype(np.float32): np.empty((1, 1), np.float32), np.dtype(np.floa
 _DUMMY_I = np.empty((1, 1), np.int32)
 
 
-def _f32(x, shape_tail, name):
-    a = np.ascontiguousarray(x, dtype=np.float32)
-    if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
-        raise ValueError(f"Expected {name} of shape (N, {', '.join(map(str, shape_tail))}), found {a.shape}")
+def _as(x, dtype, shape: tuple, name: str) -> np.ndarray:
+    """C-contiguous array of `dtype` with `shape` (-1 entries free), else ValueError naming `name`."""
+    a = np.ascontiguousarray(x, dtype=dtype)
+    if a.ndim != len(shape) or any(s != -1 and s != t for s, t in zip(shape, a.shape)):
+        want = "(" + ", ".join("*" if s == -1 else str(s) for s in shape) + ")"
+        raise ValueError(f"Expected {name} of shape {want}, found {a.shape}")
     return a
 
 
@@ -205,28 +207,25 @@ def rasterize_numpy(means,        # [N, 3]
         >>> out["rgb"].shape, out["instance"].dtype  # doctest: +SKIP
         ((1, 48, 64, 3), dtype('int32'))
     """
-    means = _f32(means, (3,), "means")
+    f32 = np.float32
+    means = _as(means, f32, (-1, 3), "means")
     n = means.shape[0]
-    quats = _f32(quats, (4,), "quats")
-    scales = _f32(scales, (3,), "scales")
-    opacities = np.ascontiguousarray(opacities, dtype=np.float32).reshape(n)
-    colors = _f32(colors, (3,), "colors")
-    viewmats = np.asarray(viewmats, dtype=np.float32).reshape(-1, 4, 4)
+    quats = _as(quats, f32, (n, 4), "quats")
+    scales = _as(scales, f32, (n, 3), "scales")
+    opacities = _as(opacities, f32, (n,), "opacities")
+    colors = _as(colors, f32, (n, 3), "colors")
+    viewmats = _as(viewmats, f32, (-1, 4, 4), "viewmats")
     C = viewmats.shape[0]
-    Ks = np.asarray(Ks, dtype=np.float32).reshape(C, 3, 3)
+    Ks = _as(Ks, f32, (C, 3, 3), "Ks")
     width = int(width)
     height = int(height)
-    if features is None:
-        feat = np.empty((n, 0), np.float32)
-    else:
-        feat = np.ascontiguousarray(features, dtype=np.float32).reshape(n, -1)
+    if width < 1 or height < 1:
+        raise ValueError(f"Expected a positive image size, found {width}x{height}")
+    feat = np.empty((n, 0), f32) if features is None else _as(features, f32, (n, -1), "features")
     D = feat.shape[1]
-    if object_ids is None:
-        ids = np.full(n, -1, np.int32)
-    else:
-        ids = np.ascontiguousarray(object_ids, dtype=np.int32).reshape(n)
-    bg = np.zeros(3, np.float32) if background is None else np.asarray(background, dtype=np.float32).reshape(3)
-    near = np.full(C, 0.01) if nears is None else np.asarray(nears, dtype=np.float64).reshape(C)
+    ids = np.full(n, -1, np.int32) if object_ids is None else _as(object_ids, np.int32, (n,), "object_ids")
+    bg = np.zeros(3, f32) if background is None else _as(background, f32, (3,), "background")
+    near = np.full(C, 0.01) if nears is None else _as(nears, np.float64, (C,), "nears")
     rgb = np.empty((C, height, width, 3), np.float32)
     depth = np.empty((C, height, width), np.float32)
     alpha = np.empty((C, height, width), np.float32)

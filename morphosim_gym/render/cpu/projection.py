@@ -165,6 +165,7 @@ def _project_block(lo, hi,
                    scales,      # [N, 3]
                    opacities,   # [N]
                    colors,      # [N, 3]
+                   feat,        # [N, D] (checked finite only)
                    viewmat,     # [4, 4]
                    K,           # [3, 3]
                    width, height, near,
@@ -175,6 +176,9 @@ def _project_block(lo, hi,
                    counts):     # [n_tiles] int32 out (+=)
     n = hi - lo
     B = _BLOCK
+    F = rec.dtype.type
+    one = F(1.0)
+    inf = F(np.inf)
     for j in range(n):
         i = lo + j
         buf[_IN_M0 * B + j] = means[i, 0]
@@ -198,15 +202,25 @@ def _project_block(lo, hi,
         rec[i, R_CC] = buf[_OUT_CC * B + j]
         rec[i, R_OP] = buf[_IN_OP * B + j]
         rec[i, R_Z] = buf[_OUT_Z * B + j]
-        rec[i, R_R] = colors[i, 0]
-        rec[i, R_G] = colors[i, 1]
-        rec[i, R_B] = colors[i, 2]
+        cr = colors[i, 0]
+        cg = colors[i, 1]
+        cb = colors[i, 2]
+        rec[i, R_R] = cr
+        rec[i, R_G] = cg
+        rec[i, R_B] = cb
         rec[i, R_EX] = buf[_OUT_EX * B + j]
         rec[i, R_EY] = buf[_OUT_EY * B + j]
         bx0 = buf[_OUT_X0 * B + j]
         bx1 = buf[_OUT_X1 * B + j]
         by0 = buf[_OUT_Y0 * B + j]
         by1 = buf[_OUT_Y1 * B + j]
+        # a non-finite colour or feature would turn pixels NaN: cull the Gaussian instead
+        finite = (abs(cr) < inf) & (abs(cg) < inf) & (abs(cb) < inf)
+        for d in range(feat.shape[1]):
+            finite &= abs(feat[i, d]) < inf
+        if not finite:
+            bx1 = -one
+            by1 = -one
         rec[i, R_X0] = bx0
         rec[i, R_X1] = bx1
         rec[i, R_Y0] = by0
@@ -231,14 +245,14 @@ def _project_block(lo, hi,
 
 
 @jit
-def _project_range(lo, hi, means, quats, scales, opacities, colors, viewmat, K, width, height, near,
+def _project_range(lo, hi, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near,
                    rec, trect, tiles_x, counts):
     counts[:] = 0
     buf = np.empty(_NFIELD * _BLOCK, rec.dtype)
     for b in range(lo, hi, _BLOCK):
         e = min(b + _BLOCK, hi)
-        _project_block(b, e, means, quats, scales, opacities, colors, viewmat, K, width, height, near, buf, rec,
-                       trect, tiles_x, counts)
+        _project_block(b, e, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near, buf,
+                       rec, trect, tiles_x, counts)
 
 
 @pjit
@@ -247,6 +261,7 @@ def project_forward(means,      # [N, 3]
                     scales,     # [N, 3]
                     opacities,  # [N]
                     colors,     # [N, 3]
+                    feat,       # [N, D]
                     viewmat,    # [4, 4]
                     K,          # [3, 3]
                     width, height, near,
@@ -259,12 +274,13 @@ def project_forward(means,      # [N, 3]
     Writes one record per Gaussian into `rec` [N, 16] (layout `_jit.R_*`), its inclusive tile
     rectangle into `trect` [4, N] (tx0, tx1, ty0, ty1; tx1 = -1 when culled) and, per
     chunk, the number of Gaussians touching each tile into `counts` [n_threads, n_tiles].
+    Gaussians with a non-finite colour or feature are culled (they would make pixels NaN).
     """
     n = means.shape[0]
     nthr = counts.shape[0]
     for t in prange(nthr):
-        _project_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, opacities, colors, viewmat, K,
-                       width, height, near, rec, trect, tiles_x, counts[t])
+        _project_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, opacities, colors, feat, viewmat,
+                       K, width, height, near, rec, trect, tiles_x, counts[t])
 
 
 @jit
