@@ -138,7 +138,7 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
                                                                                  for c in clip.cameras}) > 1 else
                     (clip.cameras[0],), decoders=decoders,
                     provenance=Provenance(clip.prompt or None, clip.info.get("seed"), clip.info.get("backend", "clip"),
-                                          f"fit:{fit_cfg.iterations}it:{seconds:.1f}s"),
+                                          f"fit:{cache_key(clip, cfg)}"),
                     background=background)
     if path is not None:
         save_scene(scene, path)
