@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Any, Sequence
 
 import numpy as np
@@ -200,6 +201,12 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         raise ValueError(f"Expected a generate plan, found mode {getattr(plan, 'mode', None)!r}")
     instances = _instances(plan, config)
     setting_name = _choose_setting(plan, instances)
+    if setting_name == "underwater" and not any(i.category == "seaweed" for i in instances):
+        # the sea floor comes with seaweed (as the paper's fish scene has), an object edits can name
+        dressing = SimpleNamespace(name="seaweed", noun="seaweed", category="seaweed", color=None, scale=1.0, count=1)
+        spec = CATEGORY_SPECS["seaweed"]
+        instances.append(Instance(dressing, "seaweed", "seaweed", np.asarray(spec.color), None, 1.0,
+                                  mobility=spec.mobility))
     for k, inst in enumerate(instances):
         _object_cloud(inst, np.random.default_rng([seed, 1, k]), config)
     motions = {m.target: m for m in plan.motions}

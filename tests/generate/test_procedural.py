@@ -54,7 +54,7 @@ def test_clip_contract_and_priors(sim):
 
 
 @pytest.mark.parametrize("prompt,expect", [
-    ("The fish swims through the crystal-clear waters from right to left", ["water", "fish"]),
+    ("The fish swims through the crystal-clear waters from right to left", ["water", "fish", "seaweed"]),
     ("A serene boat glides gracefully through tranquil waters from left to right", ["water", "boat"]),
     ("A sleek black motorcycle is gliding effortlessly from right to left", ["road", "motorcycle"]),
     ("two sheep walk across the field from left to right", ["grass", "sheep 1", "sheep 2"]),
