@@ -18,6 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", action="store_true", help="print PSNR/SSIM on input and novel views, IoU, time")
     p.add_argument("--json", default=None, help="also write the report as JSON here")
     p.add_argument("--iterations", type=int, default=None, help="fit iterations (default: the config's)")
+    p.add_argument("--feature-iterations", type=int, default=None, help="feature-field iterations (default: the config's)")
     p.add_argument("--no-cache", action="store_true", help="fit again even if a cached result exists")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=_reconstruct)
@@ -34,6 +35,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
     cfg = ReconstructionConfig(seed=args.seed, cache=not args.no_cache)
     if args.iterations is not None:
         cfg = replace(cfg, fit=replace(cfg.fit, iterations=args.iterations))
+    if args.feature_iterations is not None:
+        cfg = replace(cfg, features=replace(cfg.features, iterations=args.feature_iterations))
     start = time.perf_counter()
     scene = reconstruct(clip, cfg)
     seconds = time.perf_counter() - start

@@ -114,7 +114,7 @@ def test_interrupted_run_leaves_no_cache_entry(clip, tmp_path):
     assert entries == []                          # no cache entry, broken or not (temporary files are never read)
     assert not (tmp_path / "out.msim").exists()
     # the next run fits from scratch and caches a readable scene
-    ok = subprocess.run([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--iterations", "5",
+    ok = subprocess.run([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--iterations", "5", "--feature-iterations", "5",
                          "--out", str(tmp_path / "out.msim")], env=env, capture_output=True, text=True, timeout=600)
     assert ok.returncode == 0, ok.stderr
     assert ms.load_scene(tmp_path / "out.msim").num_frames == clip.num_frames
