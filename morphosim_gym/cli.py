@@ -17,6 +17,7 @@ __all__ = ["main", "build_parser"]
 # Modules that define `register(subparsers)`, in the order `morphosim --help` lists them.
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "morphosim_gym.generate.cli",
+    "morphosim_gym.reconstruct.cli",
     "morphosim_gym.scene.cli",
     "morphosim_gym.language.cli",
 )

@@ -24,6 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=49)
     p.add_argument("--fps", type=float, default=8.0)
     p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
+    p.add_argument("--reconstruct", action="store_true",
+                   help="write the scene reconstructed from the clip (about two minutes) instead of the "
+                        "generator's ground truth")
     p.set_defaults(func=_generate)
 
     p = sub.add_parser("render", help="render a scene file to a video (optionally orbiting it)")
@@ -68,7 +71,8 @@ def _generate(args: argparse.Namespace) -> int:
     from ..scene import save_clip, save_scene
 
     out = Path(args.out)
-    sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps))
+    sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps),
+                    reconstruction="fit" if args.reconstruct else "oracle")
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Any, Sequence
 
 import numpy as np
@@ -24,13 +25,16 @@ import numpy as np
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, build_parts
-from .parts import SurfaceCloud, parts_to_gaussians
+from .parts import SurfaceCloud, match_mean_color, parts_to_gaussians
 from .settings import Setting, build_setting, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
 __all__ = ["GenerationConfig", "ComposedScene", "compose_scene", "camera_path"]
 
 MAX_INSTANCES = 12
+MIN_RELATIVE_SIZE = 0.3   # no object is smaller than this fraction of the scene's largest one
+RECEPTACLES = ("plate", "bowl", "table")
+VIEW_PITCH = math.radians(20.0)            # the generation camera looks down this much over the ground   # things go onto these; other landmarks are approached
 
 
 @dataclass(frozen=True)
@@ -154,10 +158,25 @@ def camera_path(spec: Any, base: Camera, centre: np.ndarray, num_frames: int) ->
     return out
 
 
+def _rescale(inst: Instance, factor: float) -> None:
+    """Grow an instance (its cloud is centred in x, y and rests on z = 0)."""
+    inst.scale *= factor
+    inst.cloud.means = inst.cloud.means * factor
+    inst.cloud.scales = inst.cloud.scales * factor
+    inst.half = inst.half * factor
+
+
 def _object_cloud(inst: Instance, rng: np.random.Generator, config: GenerationConfig) -> None:
     cat = CATEGORY_SPECS[inst.category]
     budget = max(200, int(cat.budget * config.detail))
     cloud = parts_to_gaussians(build_parts(inst.category), budget, inst.color, rng)
+    if inst.asked_color is not None:
+        # the object as a whole reads as the asked colour: the mean of what a camera sees from the
+        # side and slightly above (projected area of each surface Gaussian) matches in Lab
+        normals = quat_to_matrix(cloud.quats)[:, :, 2]
+        seen = np.abs(normals[:, 1]) * math.cos(VIEW_PITCH) + np.clip(normals[:, 2], 0, None) * math.sin(VIEW_PITCH)
+        area = cloud.scales[:, 0] * cloud.scales[:, 1] * cloud.opacities * (0.05 + seen)
+        cloud.colors = match_mean_color(cloud.colors, area, inst.asked_color)
     cloud.means = cloud.means * inst.scale
     cloud.scales = cloud.scales * inst.scale
     lo, hi = cloud.means.min(0), cloud.means.max(0)
@@ -182,6 +201,12 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         raise ValueError(f"Expected a generate plan, found mode {getattr(plan, 'mode', None)!r}")
     instances = _instances(plan, config)
     setting_name = _choose_setting(plan, instances)
+    if setting_name == "underwater" and not any(i.category == "seaweed" for i in instances):
+        # the sea floor comes with seaweed (as the paper's fish scene has), an object edits can name
+        dressing = SimpleNamespace(name="seaweed", noun="seaweed", category="seaweed", color=None, scale=1.0, count=1)
+        spec = CATEGORY_SPECS["seaweed"]
+        instances.append(Instance(dressing, "seaweed", "seaweed", np.asarray(spec.color), None, 1.0,
+                                  mobility=spec.mobility))
     for k, inst in enumerate(instances):
         _object_cloud(inst, np.random.default_rng([seed, 1, k]), config)
     motions = {m.target: m for m in plan.motions}
@@ -195,6 +220,12 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
 
     movers = [i for i in instances if moves(i)]
     standers = [i for i in instances if not moves(i)]
+    # ---- visibility floor: a named object is never tiny next to the largest one
+    largest = max(float(max(i.half[0], i.half[1], i.half[2])) for i in instances)
+    for inst in instances:
+        own = float(max(inst.half[0], inst.half[1], inst.half[2]))
+        if own < MIN_RELATIVE_SIZE * largest:
+            _rescale(inst, MIN_RELATIVE_SIZE * largest / own)
     # ---- scale of the scene and the camera framing
     key = movers or instances
     size = max((float(max(i.half[0], i.half[1])) * 2 for i in key), default=1.0)
@@ -203,10 +234,13 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
     distance = size / config.frame_fraction * fx_over_w
     all_size = max((float(max(i.half[0], i.half[1])) * 2 for i in instances), default=size)
     distance = max(distance, all_size * 1.6 * fx_over_w / 0.8)
-    if setting_name in ("underwater", "sky"):
-        pitch = math.radians(4.0)
-    else:
-        pitch = math.radians(20.0)
+    landmark_names = {getattr(m, k) for m in plan.motions for k in ("end", "start", "around") if getattr(m, k)}
+    back = [i for i in standers if i.spec.name not in landmark_names]
+    spacing = all_size * 1.3
+    row_half = (len(back) - 1) / 2 * spacing + all_size / 2
+    # the row of standing objects fits in 80% of the view's width
+    distance = max(distance, row_half / 0.4 * fx_over_w)
+    pitch = math.radians(4.0) if setting_name in ("underwater", "sky") else VIEW_PITCH
     levels = setting_levels(setting_name)
     heights = {}
     for inst in instances:
@@ -224,42 +258,20 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
     tall = max((2 * float(i.half[2]) + lift[i.name] for i in key), default=size)
     fy_over_h = 0.5 / math.tan(math.radians(config.fov_y_deg) / 2)
     distance = max(distance, tall / 0.55 * fy_over_h)
-    eye = np.array([0.0, -distance * math.cos(pitch), focus_z + distance * math.sin(pitch)])
-    base_cam = Camera.look_at(eye, (0.0, 0.0, focus_z), config.width, config.height, config.fov_y_deg)
-    span = distance * config.width / (2 * base_cam.fx)        # half-width of the view at the centre, metres
+    for _ in range(6):
+        eye = np.array([0.0, -distance * math.cos(pitch), focus_z + distance * math.sin(pitch)])
+        base_cam = Camera.look_at(eye, (0.0, 0.0, focus_z), config.width, config.height, config.fov_y_deg)
+        span = distance * config.width / (2 * base_cam.fx)    # half-width of the view at the centre, metres
+        _place(plan, movers, back, standers, landmark_names, by_spec, heights, size, span, spacing)
+        reach = max(abs(float(i.position[0])) + float(max(i.half[:2])) for i in instances)
+        if reach <= 0.85 * span:
+            break
+        distance *= reach / (0.85 * span)
 
-    # ---- placement
-    spacing = max(size * 1.3, 0.3 * span)
-    for r, inst in enumerate(movers):
-        row = [0.0, 0.9, -0.6, 1.6, 2.2][r % 5] * max(size, 0.2 * span) * 1.1
-        lateral = 0.0 if len(movers) == 1 else (r % 2) * 0.0
-        inst.position = np.array([lateral, row, heights[inst.name]])
-    landmark_names = {getattr(m, k) for m in plan.motions for k in ("end", "start", "around") if getattr(m, k)}
-    back = [i for i in standers if i.spec.name not in landmark_names]
-    for k, inst in enumerate(back):
-        n = len(back)
-        x = (k - (n - 1) / 2) * spacing * 1.1
-        y = (1.2 if movers else 0.0) * max(size, 0.2 * span) + (0.3 * spacing if n > 3 and k % 2 else 0.0)
-        inst.position = np.array([x, y, heights[inst.name]])
-    for inst in standers:
-        if inst.spec.name not in landmark_names:
-            continue
-        users = [m for m in plan.motions if inst.spec.name in (m.end, m.start, m.around)]
-        m = users[0]
-        mover = by_spec[m.target][0]
-        if m.around == inst.spec.name:
-            inst.position = mover.position.copy()
-            inst.position[2] = heights[inst.name]
-        else:
-            d = m.direction_world
-            side = 1.0 if d is None or d[0] >= 0 else -1.0
-            if m.start == inst.spec.name:
-                side = -side
-            inst.position = np.array([mover.position[0] + side * 0.55 * span, mover.position[1], heights[inst.name]])
     # ---- receptacles: things that go "to" a plate / bowl / table end on top of it
     top_of = {}
     for inst in standers:
-        if inst.category in ("plate", "bowl", "table", "box", "book"):
+        if inst.category in RECEPTACLES:
             top_of[inst.spec.name] = float(inst.position[2] + 2 * inst.half[2] * (0.35 if inst.category == "bowl" else 1.0))
 
     # ---- camera path, then the setting detailed where it looks
@@ -283,6 +295,44 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
     return ComposedScene(scene, trajectories, setting, cameras)
 
 
+def _place(plan: Any, movers: list, back: list, standers: list, landmark_names: set, by_spec: dict, heights: dict,
+           size: float, span: float, spacing: float) -> None:
+    """Positions of every instance for a view `span` metres half-wide at the centre.
+
+    Movers take rows at different depths (bigger ones further back, smaller in front,
+    staggered sideways; swimmers and flyers also spread in height); objects that only stand by
+    line up behind them; landmarks sit where their mover goes around, starts or ends: on
+    either side of it along its direction (or left to right), far enough apart for their sizes.
+    """
+    by_size = sorted(movers, key=lambda i: -float(max(i.half)))
+    for r, inst in enumerate(by_size):
+        row = [0.0, -1.0, 1.0, -0.5, 0.5, -1.5, 1.5][r % 7] * max(size, 0.2 * span) * 0.9
+        lateral = 0.0 if r == 0 else (1.0 if r % 2 else -1.0) * (0.15 + 0.1 * (r // 3)) * span
+        z = heights[inst.name]
+        if inst.mobility in ("air", "swim") and r:
+            z += (1.0 if r % 2 else -1.0) * 0.6 * size * (1 + r // 3)
+            z = max(z, float(inst.half[2]) * 1.2)
+        inst.position = np.array([lateral, row, z])
+    for k, inst in enumerate(back):
+        x = (k - (len(back) - 1) / 2) * spacing
+        y = (1.2 if movers else 0.0) * max(size, 0.2 * span)
+        inst.position = np.array([x, y, heights[inst.name]])
+    for inst in standers:
+        if inst.spec.name not in landmark_names:
+            continue
+        m = next(m for m in plan.motions if inst.spec.name in (m.end, m.start, m.around))
+        mover = by_spec[m.target][0]
+        if m.around == inst.spec.name:
+            inst.position = np.array([mover.position[0], mover.position[1], heights[inst.name]])
+            continue
+        d = m.direction_world
+        side = 1.0 if d is None or d[0] >= 0 else -1.0
+        if m.start == inst.spec.name:
+            side = -side
+        offset = max(0.4 * span, float(max(inst.half[:2])) + 3.0 * float(max(mover.half[:2])))
+        inst.position = np.array([mover.position[0] + side * offset, mover.position[1], heights[inst.name]])
+
+
 def _rise_onto(positions: np.ndarray, top: float, rest: float) -> np.ndarray:
     """Anchor heights climbing onto a receptacle over the last part of the approach."""
     end = positions[-1, :2]
@@ -298,8 +348,13 @@ def _request(m: Any, inst: Instance, by_spec: dict, top_of: dict) -> MotionReque
     direction = tuple(m.direction_world) if m.direction_world is not None else (1.0, 0.0, 0.0)
     path = m.path
     if m.end is not None and path in ("straight", "bounce", "zigzag", "oscillate"):
+        def gap(other: str | None) -> float:
+            if other is None or other in top_of:
+                return 0.0
+            return 1.1 * (float(max(inst.half[:2])) + float(max(by_spec[other][0].half[:2])))
+
         return MotionRequest("to", direction, m.speed, start=pos(m.start), end=pos(m.end),
-                             end_height=top_of.get(m.end))
+                             end_height=top_of.get(m.end), clearance=gap(m.end), start_clearance=gap(m.start))
     if path == "circle":
         return MotionRequest("circle", direction, m.speed, clockwise=m.clockwise is not False,
                              center=pos(m.around) if m.around else None)

@@ -64,6 +64,8 @@ class MotionRequest:
         end: world point to reach for path "to" (e.g. "to the plate").
         center: world centre of a circle path.
         end_height: anchor height at the end of a "to" path (on top of a receptacle).
+        clearance: a "to" path stops this many metres short of `end` (beside the landmark, not in it).
+        start_clearance: and starts this many metres away from `start` towards `end`.
     """
 
     path: str = "straight"
@@ -74,6 +76,8 @@ class MotionRequest:
     end: Optional[tuple[float, float, float]] = None
     center: Optional[tuple[float, float, float]] = None
     end_height: Optional[float] = None
+    clearance: float = 0.0
+    start_clearance: float = 0.0
 
     def __post_init__(self) -> None:
         if self.path not in PATHS:
@@ -263,13 +267,19 @@ def plan_trajectory(
                 start = np.asarray(request.start, dtype=np.float64).copy()
                 start[2] = anchor[2]
             else:
-                away = end - np.asarray(cam0.position)
-                side = np.array([-away[1], away[0], 0.0])
-                side /= max(np.linalg.norm(side), 1e-9)
+                right = cam0.camera_to_world[:3, 0].copy()
+                right[2] = 0.0
+                right /= max(np.linalg.norm(right), 1e-9)
                 # start across the frame from the landmark (left of it if it sits right of centre)
                 end_uv = cam0.project(end)[0]
                 sign = -1.0 if end_uv[0] >= W / 2 else 1.0
-                start = end + sign * side * _ground_span(cam0, end) * 0.45 * scale_mult
+                start = end + sign * right * _ground_span(cam0, end) * 0.45 * scale_mult
+            if request.clearance > 0 or request.start_clearance > 0:
+                approach = end - start
+                dist = float(np.linalg.norm(approach))
+                unit = approach / max(dist, 1e-9)
+                end = end - unit * min(request.clearance, 0.45 * dist)
+                start = start + unit * min(request.start_clearance, 0.45 * dist)
             uv0, uv1 = cam0.project(start)[0], cam0.project(end)[0]
             frac_arrive = min(1.0, 0.8 / max(scale, 1e-6))
             n_move = max(1, int(round(frac_arrive * (T - 1))))

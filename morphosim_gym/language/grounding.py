@@ -201,6 +201,9 @@ def resolve_in_scene(noun: str, items: Sequence[SceneItem], text: str | None = N
             hits = [it for it in items if it.category == g.category]
             if not hits and g.kind == "category":  # "the automobile" -> an object named "car"
                 hits = [it for it in items if singular(it.name.lower()) == g.category]
+        if not hits and g is not None and g.kind == "category":
+            # a known category the scene does not have: never re-map it to another category by meaning
+            raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
     # by meaning, among foreground objects (backgrounds are named by their setting words)
     pool = [it for it in items if not it.background]
     if not hits and pool and embeddings.is_available():

@@ -69,7 +69,10 @@ SIZE_WORDS: dict[str, float] = {
 
 NUMBER_WORDS: dict[str, int] = {
     "zero": 0, "one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8, "nine": 9, "ten": 10,
-    "eleven": 11, "twelve": 12, "a dozen": 12, "dozen": 12, "twenty": 20, "hundred": 100, "thousand": 1000,
+    "eleven": 11, "twelve": 12, "thirteen": 13, "fourteen": 14, "fifteen": 15, "sixteen": 16, "seventeen": 17,
+    "eighteen": 18, "nineteen": 19, "twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60,
+    "seventy": 70, "eighty": 80, "ninety": 90, "a dozen": 12, "dozen": 12, "hundred": 100, "a hundred": 100,
+    "thousand": 1000, "a thousand": 1000, "million": 1000000, "a million": 1000000,
     "single": 1, "both": 2, "a pair of": 2, "pair of": 2, "a couple of": 2, "couple of": 2, "several": 3,
     "a few": 3, "few": 3, "some": 3, "many": 5, "lots of": 5, "a lot of": 5, "multiple": 3,
 }

@@ -207,6 +207,9 @@ def _match_phrase(toks: Sequence[str], i: int, table: dict[tuple[str, ...], Any]
 
 
 _NUMBER_PHRASES = {tuple(k.split()): v for k, v in NUMBER_WORDS.items()}
+# number words that combine into compound numbers (no "a few" / "several")
+_COMPOUND_NUMBER = {k: v for k, v in NUMBER_WORDS.items() if " " not in k and k not in (
+    "single", "both", "several", "few", "some", "many", "multiple", "dozen")}
 _SIZE_PHRASES = {tuple(k.split()): k for k in SIZE_WORDS}
 
 
@@ -218,11 +221,37 @@ def _number_at(toks: Sequence[str], i: int) -> tuple[int, int] | None:
         v = float(w)
         if v != int(v):
             raise CommandError(f"Could not understand the count {w!r}: expected a whole number of objects")
-        return int(v), 1
-    hit = _match_phrase(toks, i, _NUMBER_PHRASES)
-    if hit is not None:
-        return hit
-    return None
+        value, used = int(v), 1
+    else:
+        hit = _match_phrase(toks, i, _NUMBER_PHRASES)
+        if hit is None:
+            return None
+        value, used = hit
+        if not (toks[i] in _COMPOUND_NUMBER or toks[i] == "a"):
+            return hit                     # "a few", "several", "both": no arithmetic
+    # compound numbers: "twenty five" = 25, "ten thousand" = 10000, "two hundred and six" = 206
+    total, current = 0, value
+    j = i + used
+    while j < len(toks):
+        w = toks[j]
+        if w == "and" and j + 1 < len(toks) and toks[j + 1] in _COMPOUND_NUMBER and current >= 100:
+            j += 1
+            continue
+        v = _COMPOUND_NUMBER.get(w)
+        if v is None:
+            break
+        if v in (100, 1000, 1000000):
+            current = max(current, 1) * v
+            if v >= 1000:
+                total, current = total + current, 0
+        elif v < 10 and ((current % 100 >= 20 and current % 10 == 0) or (current >= 100 and current % 100 == 0)):
+            current += v               # "twenty five", "two hundred five"
+        elif 10 <= v < 100 and current >= 100 and current % 100 == 0:
+            current += v               # "two hundred twenty"
+        else:
+            break
+        j += 1
+    return total + current, j - i
 
 
 def _parse_np(toks: Sequence[str], i: int, edit: bool = False) -> _NP | None:

@@ -160,6 +160,9 @@ class FeatureConfig:
     Attributes:
         dim: D, the latent width per Gaussian.
         iterations: distillation steps (one frame each).
+        resolution: feature maps are rendered at this fraction of the clip's resolution (the
+            encoders' maps are sampled at the same pixel centres).
+        pixels: pixels sampled per step for the decoders' loss (0: all).
         lr_features, lr_decoders: learning rates.
         hidden: decoder hidden width.
         encoders: which offline encoders ("semantic", "color"); `clip_path` adds a CLIP-style one.
@@ -169,7 +172,9 @@ class FeatureConfig:
     """
 
     dim: int = 32
-    iterations: int = 300
+    iterations: int = 200
+    resolution: float = 0.5
+    pixels: int = 2048
     lr_features: float = 1e-2
     lr_decoders: float = 3e-3
     hidden: int = 64
@@ -213,8 +218,18 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
                             {"params": decoders.parameters(), "lr": cfg.lr_decoders}])
     targets = {}
     start = time.perf_counter()
+    if not 0 < cfg.resolution <= 1:
+        raise ValueError(f"Expected resolution in (0, 1], found {cfg.resolution}")
+    Wf, Hf = max(8, int(round(W * cfg.resolution))), max(8, int(round(H * cfg.resolution)))
+    sx, sy = Wf / W, Hf / H
+    # the full-resolution pixel under each reduced pixel's centre
+    cols = np.minimum(((np.arange(Wf) + 0.5) / sx).astype(int), W - 1)
+    rows = np.minimum(((np.arange(Hf) + 0.5) / sy).astype(int), H - 1)
     viewmats = torch.from_numpy(np.stack([c.world_to_camera for c in clip.cameras]).astype(np.float32))
-    Ks = torch.from_numpy(np.stack([c.K for c in clip.cameras]).astype(np.float32))
+    Ks = np.stack([c.K for c in clip.cameras]).astype(np.float32)
+    Ks[:, 0] *= sx
+    Ks[:, 1] *= sy
+    Ks = torch.from_numpy(Ks)
     nears = torch.tensor([c.near for c in clip.cameras], dtype=torch.float64)
     with torch.no_grad():
         scales, opac, colors = model.scales().detach(), model.opacities().detach(), model.colors().detach()
@@ -226,19 +241,23 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
             order = list(rng.permutation(T))
         t = int(order.pop())
         if t not in targets:
-            targets[t] = [tuple(torch.from_numpy(a) for a in e.encode(clip, t)) for e in encs]
+            targets[t] = [tuple(torch.from_numpy(np.ascontiguousarray(a[rows][:, cols])) for a in e.encode(clip, t))
+                          for e in encs]
         with torch.no_grad():
             means, quats = model.warp(t)
-        out = rasterize(means.detach(), quats.detach(), scales, opac, colors, viewmats[t:t + 1], Ks[t:t + 1], W, H,
+        out = rasterize(means.detach(), quats.detach(), scales, opac, colors, viewmats[t:t + 1], Ks[t:t + 1], Wf, Hf,
                         features=model.features, nears=nears[t:t + 1], backend=cfg.backend)
         fmap = out["features"][0]                                               # [H, W, D]
         alpha = out["alpha"][0].detach()
         loss = fmap.sum() * 0.0
         for dec, (target, valid) in zip(decoders, targets[t]):
-            sel = valid & (alpha > 0.5)
-            if sel.any():
-                pred = dec(fmap[sel] / alpha[sel][:, None])                    # alpha-normalised pixel feature
-                loss = loss + ((pred - target[sel]) ** 2).mean()
+            idx = torch.nonzero((valid & (alpha > 0.5)).reshape(-1)).squeeze(1)
+            if cfg.pixels and len(idx) > cfg.pixels:
+                idx = idx[torch.from_numpy(rng.choice(len(idx), cfg.pixels, replace=False))]
+            if len(idx):
+                f = fmap.reshape(-1, fmap.shape[-1])[idx] / alpha.reshape(-1)[idx][:, None]   # alpha-normalised
+                pred = dec(f)
+                loss = loss + ((pred - target.reshape(-1, target.shape[-1])[idx]) ** 2).mean()
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()

@@ -12,7 +12,7 @@ SMALL = ms.GenerationConfig(width=96, height=96, num_frames=25, detail=0.6)
 
 @pytest.fixture(scope="module")
 def sim():
-    return ms.MorphoSim(generation=SMALL)
+    return ms.MorphoSim(generation=SMALL, reconstruction="oracle")
 
 
 @pytest.fixture(scope="module")

@@ -121,3 +121,30 @@ def test_one_pixel_and_odd_sizes():
                               T(K), w, h, object_ids=torch.as_tensor(s["object_ids"]))
         assert out["rgb"].shape == (1, h, w, 3)
         np.testing.assert_allclose(out["rgb"], ref["rgb"].numpy(), atol=1e-5)
+
+
+def test_non_finite_colour_or_feature_is_culled_not_nan():
+    s = random_scene(4, 200, d=2)
+    s["colors"][::7] = np.nan
+    s["colors"][1::7, 1] = np.inf
+    s["features"][2::7, 0] = np.nan
+    vm, K, near = camera_arrays([CAM])
+    out = rasterize_numpy(**s, viewmats=vm, Ks=K, width=W, height=H)
+    for k in ("rgb", "depth", "alpha", "features"):
+        assert np.all(np.isfinite(out[k])), k
+    bad = np.zeros(200, bool)
+    bad[::7] = bad[1::7] = bad[2::7] = True
+    clean = {k: (v[~bad] if k != "features" else v[~bad]) for k, v in s.items()}
+    ref = rasterize_numpy(**clean, viewmats=vm, Ks=K, width=W, height=H)
+    np.testing.assert_array_equal(out["rgb"], ref["rgb"])
+
+
+def test_mis_shaped_arguments_raise_value_error():
+    s = random_scene(5, 10)
+    vm, K, near = camera_arrays([CAM])
+    with pytest.raises(ValueError, match="Expected quats of shape"):
+        rasterize_numpy(s["means"], s["quats"][:, :3], s["scales"], s["opacities"], s["colors"], vm, K, W, H)
+    with pytest.raises(ValueError, match="Expected Ks of shape"):
+        rasterize_numpy(s["means"], s["quats"], s["scales"], s["opacities"], s["colors"], vm, K[:, :2], W, H)
+    with pytest.raises(ValueError, match="Expected a positive image size"):
+        rasterize_numpy(s["means"], s["quats"], s["scales"], s["opacities"], s["colors"], vm, K, 0, H)

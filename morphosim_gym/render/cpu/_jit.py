@@ -19,7 +19,7 @@ import math
 import numba
 import numpy as np
 from llvmlite import ir
-from numba.core import types
+from numba.core import cgutils, types
 from numba.extending import intrinsic, overload
 
 # Twins of the constants of `morphosim_gym.render.reference` (which imports torch; the numpy hot
@@ -33,7 +33,7 @@ FOV_CLAMP = 1.3
 EXTENT_MARGIN = 0.05
 
 __all__ = [
-    "jit", "pjit", "splat_exp", "splat_log", "float_bits",
+    "jit", "pjit", "splat_exp", "splat_log", "float_bits", "atomic_add",
     "TILE", "ALPHA_MIN", "ALPHA_MAX", "T_MIN", "BLUR", "FOV_CLAMP", "EXTENT_MARGIN", "NREC",
     "R_MX", "R_MY", "R_CA", "R_CB", "R_CC", "R_OP", "R_Z", "R_R", "R_G", "R_B", "R_EX", "R_EY",
     "R_X0", "R_X1", "R_Y0", "R_Y1",
@@ -99,6 +99,22 @@ def float_bits(typingctx, x):
 
     def codegen(context, builder, signature, args):
         return builder.bitcast(args[0], ir.IntType(width))
+
+    return sig, codegen
+
+
+@intrinsic
+def atomic_add(typingctx, arr, idx, val):
+    """arr[idx] += val atomically on an int64 array; returns the old value (work claiming)."""
+    if not (isinstance(arr, types.Array) and arr.dtype == types.int64 and arr.ndim == 1):
+        return None
+    sig = types.int64(arr, types.intp, types.int64)
+
+    def codegen(context, builder, signature, args):
+        arrty = signature.args[0]
+        ary = context.make_array(arrty)(context, builder, args[0])
+        ptr = cgutils.get_item_pointer(context, builder, arrty, ary, [args[1]])
+        return builder.atomic_rmw("add", ptr, args[2], "seq_cst")
 
     return sig, codegen
 

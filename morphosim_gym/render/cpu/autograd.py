@@ -13,14 +13,18 @@ from __future__ import annotations
 
 from typing import Optional
 
+import numba
 import numpy as np
 import torch
 
-from .backward import NGRAD, raster_backward
-from .pipeline import render_camera
+from .backward import NGRAD, raster_backward, reduce_entries
+from .pipeline import _workspace, render_camera
 from .projection import project_backward
 
 __all__ = ["rasterize_cpu"]
+
+#: optional `pipeline.StageTimer` collecting per-stage times (set by benchmarks/render.py)
+_STAGE_TIMER = None
 
 
 def _np(t: torch.Tensor) -> np.ndarray:
@@ -40,10 +44,13 @@ class _RasterizeCPU(torch.autograd.Function):
         alpha = np.empty((C, height, width), npdt)
         inst = np.empty((C, height, width), np.int32)
         fout = np.empty((C, height, width, D), npdt)
+        save = any(ctx.needs_input_grad[:6])   # no input needs a gradient: forward only, reuse scratch
+        ws = None if save else _workspace()
         states = []
         for ci in range(C):
             states.append(render_camera(m, q, s, o, c, f, ids, viewmats[ci], Ks[ci], float(nears[ci]), width, height,
-                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=True))
+                                        bg, rgb[ci], depth[ci], alpha[ci], inst[ci], fout[ci], save=save,
+                                        timer=_STAGE_TIMER, ws=ws))
         outs = [torch.from_numpy(x) for x in (rgb, depth, alpha, inst, fout)]
         ctx.mark_non_differentiable(outs[3])
         ctx.states = states
@@ -77,15 +84,27 @@ class _RasterizeCPU(torch.autograd.Function):
         go = np.zeros(N, npdt)
         gc = np.zeros((N, 3), npdt)
         gf = np.zeros((N, D), npdt)
+        timer = _STAGE_TIMER
+        nthr = numba.get_num_threads()
+        grad2d = np.empty((N, NGRAD), npdt)
+        gfeat2d = np.empty((N, D), npdt)
+        claim = np.zeros(1, np.int64)
         for ci, st in enumerate(ctx.states):
-            nthr = st.assign.shape[0]
-            grad2d = np.zeros((nthr, N, NGRAD), npdt)
-            gfeat2d = np.zeros((nthr, N, D), npdt)
-            raster_backward(st.assign, st.nper, st.tile_start, st.lst, st.rec, f, width, height, st.tiles_x,
+            if timer:
+                timer.start()
+            total = st.lst.shape[0]
+            grad_e = np.empty((total, NGRAD), npdt)
+            gfeat_e = np.empty((total, D), npdt)
+            raster_backward(st.order, claim, nthr, st.tile_start, st.lst, st.rec, f, width, height, st.tiles_x,
                             rgb[ci], depth[ci], fout[ci], st.tfinal, st.last, g_rgb[ci], g_depth[ci], g_alpha[ci],
-                            g_feat[ci], grad2d, gfeat2d)
-            project_backward(m, q, s, viewmats[ci], Ks[ci], width, height, st.rec, grad2d, gfeat2d,
+                            g_feat[ci], grad_e, gfeat_e)
+            reduce_entries(nthr, st.lst, grad_e, gfeat_e, grad2d, gfeat2d)
+            if timer:
+                timer.lap("bwd_raster")
+            project_backward(nthr, m, q, s, viewmats[ci], Ks[ci], width, height, st.rec, grad2d, gfeat2d,
                              gm, gq, gs, go, gc, gf)
+            if timer:
+                timer.lap("bwd_project")
         grads = [torch.from_numpy(x) for x in (gm, gq, gs, go, gc, gf)]
         needs = ctx.needs_input_grad
         grads = [g if needs[k] else None for k, g in enumerate(grads)]

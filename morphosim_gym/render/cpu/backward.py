@@ -20,7 +20,9 @@ where the clamp is active no gradient reaches o or p. Per Gaussian the pass accu
 
     d mean2d (2), d conic (3), d opacity, d depth (camera z), d colour (3)  [+ d features (D)]
 
-into a per-thread buffer (threads render disjoint tiles; buffers are summed afterwards).
+into one row per tile-list entry (each entry belongs to one tile, so any thread may render
+any tile and the result is the same); `reduce_entries` sums the rows per Gaussian in list
+order, so gradients are deterministic.
 Reductions over pixels are vectorised, so this module compiles with `reassoc`.
 """
 
@@ -31,9 +33,10 @@ import numpy as np
 from numba import prange
 
 from ._jit import (ALPHA_MAX, ALPHA_MIN, R_B, R_CA, R_CB, R_CC, R_G, R_MX, R_MY, R_OP, R_R, R_X0, R_X1, R_Y0,
-                   R_Y1, R_Z, splat_exp)
+                   R_Y1, R_Z, atomic_add, splat_exp)
+from .binning import argsort_int
 
-__all__ = ["raster_backward", "G_MX", "G_MY", "G_CA", "G_CB", "G_CC", "G_OP", "G_Z", "G_R", "G_G", "G_B", "NGRAD"]
+__all__ = ["raster_backward", "reduce_entries", "G_MX", "G_MY", "G_CA", "G_CB", "G_CC", "G_OP", "G_Z", "G_R", "G_G", "G_B", "NGRAD"]
 
 # columns of the per-Gaussian 2D gradient buffer
 G_MX, G_MY, G_CA, G_CB, G_CC, G_OP, G_Z, G_R, G_G, G_B = range(10)
@@ -57,8 +60,8 @@ _S_SIZE = 2560
 
 
 @_jit_r
-def _backward_tiles(tiles,        # [n] int32 tiles of this thread
-                    ntiles_mine,
+def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
+                    claim,        # [1] int64 next position in `order` (shared by the threads)
                     tile_start,   # [n_tiles + 1] int64
                     lst,          # [n_entries] int32, depth-sorted per tile by the forward pass
                     rec,          # [N, 16]
@@ -73,14 +76,14 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
                     g_depth,      # [H, W]
                     g_alpha,      # [H, W]
                     g_feat,       # [H, W, D]
-                    grad,         # [N, NGRAD] out (+=), this thread's buffer
-                    grad_feat):   # [N, D] out (+=), this thread's buffer
+                    grad_e,       # [n_entries, NGRAD] out: per list entry
+                    gfeat_e):     # [n_entries, D] out: per list entry
     F = rec.dtype.type
     D = feat.shape[1]
     S = np.empty(_S_SIZE, F)
     gfp = np.zeros(max(D, 1) * 256, F)   # g_feat of the tile, channel-major
     rowbits = np.empty(16, np.int64)
-    order = np.empty(256, np.int64)
+    pix_order = np.empty(256, np.int64)
     lastp = np.empty(256, np.int64)
     one = F(1.0)
     zero = F(0.0)
@@ -97,9 +100,14 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
     uL = np.uint64(_S_LAST)
     uW = np.uint64(_S_W)
     uGF = np.uint64(_S_GF)
-    for q in range(ntiles_mine):
-        tile = tiles[q]
+    ntiles = order.shape[0]
+    while True:
+        q = atomic_add(claim, 0, 1)
+        if q >= ntiles:
+            break
+        tile = order[q]
         start = tile_start[tile]
+        L = tile_start[tile + 1] - start
         x0 = (tile % tiles_x) * 16
         y0 = (tile // tiles_x) * 16
         nx = min(16, width - x0)
@@ -138,7 +146,7 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
                 lastp[p] = lp
                 kend = max(kend, lp)
         # pixels ordered by their stop position, to clear their active bits as k passes it
-        order[:] = np.argsort(lastp)
+        argsort_int(lastp, pix_order)
         for ly in range(16):
             rowbits[ly] = 0
         nev = 0
@@ -150,8 +158,8 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
         x0f = F(x0) + half
         y0f = F(y0) + half
         for k in range(kend):
-            while nev < 256 and lastp[order[nev]] <= k:
-                p = order[nev]
+            while nev < 256 and lastp[pix_order[nev]] <= k:
+                p = pix_order[nev]
                 rowbits[p >> 4] &= ~(1 << (p & 15))
                 nev += 1
             i = lst[start + k]
@@ -165,6 +173,10 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
             while ly1 >= ly0 and (rowbits[ly1] & colmask) == 0:
                 ly1 -= 1
             if ly0 > ly1:
+                for c in range(NGRAD):
+                    grad_e[start + k, c] = zero
+                for d in range(D):
+                    gfeat_e[start + k, d] = zero
                 continue
             mx = rec[i, R_MX]
             my = rec[i, R_MY]
@@ -233,28 +245,36 @@ def _backward_tiles(tiles,        # [n] int32 tiles of this thread
                 S[uW + p] = w
                 S[uP + p] = Pn if ok else Pold + zero
                 S[uT + p] = Tp * (one - al) if ok else Tp + zero
-            grad[i, 0] += g_mx
-            grad[i, 1] += g_my
-            grad[i, 2] += g_ca
-            grad[i, 3] += g_cb
-            grad[i, 4] += g_cc
-            grad[i, 5] += g_op
-            grad[i, 6] += g_z
-            grad[i, 7] += g_r
-            grad[i, 8] += g_g
-            grad[i, 9] += g_b
+            e = start + k
+            grad_e[e, G_MX] = g_mx
+            grad_e[e, G_MY] = g_my
+            grad_e[e, G_CA] = g_ca
+            grad_e[e, G_CB] = g_cb
+            grad_e[e, G_CC] = g_cc
+            grad_e[e, G_OP] = g_op
+            grad_e[e, G_Z] = g_z
+            grad_e[e, G_R] = g_r
+            grad_e[e, G_G] = g_g
+            grad_e[e, G_B] = g_b
             for d in range(D):
                 fb = np.uint64(d * 256)
                 s = zero
                 for pp in range(pa, pb):
                     p = np.uint64(pp)
                     s += S[uW + p] * gfp[fb + p]
-                grad_feat[i, d] += s
+                gfeat_e[e, d] = s
+        # entries behind every pixel's stop position got no gradient
+        for e in range(start + kend, start + L):
+            for c in range(NGRAD):
+                grad_e[e, c] = zero
+            for d in range(D):
+                gfeat_e[e, d] = zero
 
 
 @numba.njit(parallel=True, **_OPTS)
-def raster_backward(assign,      # [n_threads, n_tiles] int32
-                    nper,        # [n_threads] int64
+def raster_backward(order,       # [n_tiles] int32 tiles, longest list first
+                    claim,       # [1] int64 work counter (set to 0 here)
+                    nthr,
                     tile_start,  # [n_tiles + 1] int64
                     lst,         # [n_entries] int32
                     rec,         # [N, 16]
@@ -269,11 +289,44 @@ def raster_backward(assign,      # [n_threads, n_tiles] int32
                     g_depth,     # [H, W]
                     g_alpha,     # [H, W]
                     g_feat,      # [H, W, D]
-                    grad,        # [n_threads, N, NGRAD] out (+=)
-                    grad_feat):  # [n_threads, N, D] out (+=)
-    """Per-Gaussian gradients of one camera's outputs w.r.t. its records (see module docstring);
-    thread k handles tiles assign[k, :nper[k]] and accumulates into grad[k], grad_feat[k]."""
-    nthr = assign.shape[0]
+                    grad_e,      # [n_entries, NGRAD] out
+                    gfeat_e):    # [n_entries, D] out
+    """Gradients of one camera's outputs w.r.t. each tile-list entry's record (see the module
+    docstring). Each entry belongs to one tile, so threads claim tiles freely and results do not
+    depend on which thread ran which tile; `reduce_entries` then sums them per Gaussian."""
+    claim[0] = 0
     for k in prange(nthr):
-        _backward_tiles(assign[k], nper[k], tile_start, lst, rec, feat, width, height, tiles_x, rgb, depth,
-                        feat_out, tfinal, last, g_rgb, g_depth, g_alpha, g_feat, grad[k], grad_feat[k])
+        _backward_tiles(order, claim, tile_start, lst, rec, feat, width, height, tiles_x, rgb, depth,
+                        feat_out, tfinal, last, g_rgb, g_depth, g_alpha, g_feat, grad_e, gfeat_e)
+
+
+@_jit_r
+def _reduce_range(lo, hi, lst, grad_e, gfeat_e, grad, gfeat):
+    for i in range(lo, hi):
+        for c in range(NGRAD):
+            grad[i, c] = 0.0
+        for d in range(gfeat.shape[1]):
+            gfeat[i, d] = 0.0
+    D = gfeat.shape[1]
+    for e in range(lst.shape[0]):
+        i = lst[e]
+        if i < lo or i >= hi:
+            continue
+        for c in range(NGRAD):
+            grad[i, c] += grad_e[e, c]
+        for d in range(D):
+            gfeat[i, d] += gfeat_e[e, d]
+
+
+@numba.njit(parallel=True, **_OPTS)
+def reduce_entries(nthr,
+                   lst,       # [n_entries] int32
+                   grad_e,    # [n_entries, NGRAD]
+                   gfeat_e,   # [n_entries, D]
+                   grad,      # [N, NGRAD] out
+                   gfeat):    # [N, D] out
+    """Sum the per-entry gradients of each Gaussian, in list order (deterministic): thread k owns
+    a range of Gaussian indices and scans all entries for them."""
+    n = grad.shape[0]
+    for k in prange(nthr):
+        _reduce_range(n * k // nthr, n * (k + 1) // nthr, lst, grad_e, gfeat_e, grad, gfeat)

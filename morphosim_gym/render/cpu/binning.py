@@ -15,7 +15,43 @@ from numba import prange
 
 from ._jit import R_Z, float_bits, jit, pjit
 
-__all__ = ["bin_offsets", "bin_fill", "plan_tiles", "sort_segment"]
+__all__ = ["bin_offsets", "bin_fill", "plan_tiles", "sort_segment", "argsort_int"]
+
+
+@jit
+def argsort_int(keys,   # [n] int64 >= 0
+                out):   # [n] int64 out: stable ascending order of keys
+    """Stable LSD radix argsort of small non-negative integers (cheaper to compile than np.argsort)."""
+    n = keys.shape[0]
+    tmp = np.empty(n, np.int64)
+    hist = np.empty(256, np.int64)
+    kmax = 0
+    for k in range(n):
+        out[k] = k
+        kmax = max(kmax, keys[k])
+    shift = 0
+    src, dst = out, tmp
+    swapped = False
+    while kmax > 0:
+        hist[:] = 0
+        for k in range(n):
+            hist[(keys[src[k]] >> shift) & 255] += 1
+        acc = 0
+        for d in range(256):
+            c = hist[d]
+            hist[d] = acc
+            acc += c
+        for k in range(n):
+            j = src[k]
+            d = (keys[j] >> shift) & 255
+            dst[hist[d]] = j
+            hist[d] += 1
+        src, dst = dst, src
+        swapped = not swapped
+        shift += 8
+        kmax >>= 8
+    if swapped:
+        out[:] = tmp
 
 
 @jit
@@ -71,31 +107,22 @@ def bin_fill(trect,       # [4, N] int32
 
 @jit
 def plan_tiles(tile_start,  # [n_tiles + 1] int64
-               nthr,
-               assign):     # [n_threads, n_tiles] int32 out
-    """Split the tiles between threads, longest list first to the least loaded thread.
-
-    Returns (n_per_thread [n_threads] int64, longest list length). Thread k renders tiles
-    assign[k, :n_per_thread[k]].
-    """
+               order_out):  # [n_tiles] int32 out: tiles by decreasing list length
+    """Order the tiles longest list first: threads claim tiles in this order, so the long ones
+    start early and the short ones fill the gaps at the end. Returns the longest list length."""
     ntiles = tile_start.shape[0] - 1
-    lengths = tile_start[1:] - tile_start[:-1]
-    order = np.argsort(-lengths, kind="mergesort")
-    load = np.zeros(nthr, np.int64)
-    nper = np.zeros(nthr, np.int64)
-    maxlen = 0
+    lengths = np.empty(ntiles, np.int64)
+    longest = 0
+    for t in range(ntiles):
+        lengths[t] = tile_start[t + 1] - tile_start[t]
+        longest = max(longest, lengths[t])
+    order = np.empty(ntiles, np.int64)
+    for t in range(ntiles):
+        lengths[t] = longest - lengths[t]
+    argsort_int(lengths, order)   # longest first, ties in tile order
     for q in range(ntiles):
-        t = order[q]
-        best = 0
-        for k in range(1, nthr):
-            if load[k] < load[best]:
-                best = k
-        # a little fixed cost per tile, so empty tiles spread too
-        load[best] += lengths[t] + 16
-        assign[best, nper[best]] = t
-        nper[best] += 1
-        maxlen = max(maxlen, lengths[t])
-    return nper, maxlen
+        order_out[q] = order[q]
+    return longest
 
 
 @jit

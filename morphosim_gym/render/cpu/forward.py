@@ -22,7 +22,7 @@ import numpy as np
 from numba import prange
 
 from ._jit import (ALPHA_MAX, ALPHA_MIN, R_B, R_CA, R_CB, R_CC, R_G, R_MX, R_MY, R_OP, R_R, R_X0, R_X1, R_Y0,
-                   R_Y1, R_Z, T_MIN, jit, pjit, splat_exp)
+                   R_Y1, R_Z, T_MIN, atomic_add, jit, pjit, splat_exp)
 from .binning import sort_segment
 
 __all__ = ["raster_forward"]
@@ -47,8 +47,8 @@ _S_SIZE = 2304
 
 
 @jit
-def _raster_tiles(tiles,       # [n] int32 tiles of this thread
-                  ntiles_mine,
+def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
+                  claim,       # [1] int64 next position in `order` to render (shared by the threads)
                   tile_start,  # [n_tiles + 1] int64
                   lst,         # [n_entries] int32 (sorted in place)
                   rec,         # [N, 16]
@@ -88,8 +88,13 @@ def _raster_tiles(tiles,       # [n] int32 tiles of this thread
     uKB = np.uint64(_S_KBEST)
     uL = np.uint64(_S_LAST)
     uW = np.uint64(_S_W)
-    for q in range(ntiles_mine):
-        tile = tiles[q]
+    ntiles = order.shape[0]
+    while True:
+        # claim the next tile: threads that finish early (or run undisturbed) take more tiles
+        q = atomic_add(claim, 0, 1)
+        if q >= ntiles:
+            break
+        tile = order[q]
         start = tile_start[tile]
         L = tile_start[tile + 1] - start
         sort_segment(lst, start, L, rec, keys, keys2, idx, idx2, hist)
@@ -207,8 +212,10 @@ def _raster_tiles(tiles,       # [n] int32 tiles of this thread
 
 
 @pjit
-def raster_forward(assign,      # [n_threads, n_tiles] int32
-                   nper,        # [n_threads] int64
+def raster_forward(order,       # [n_tiles] int32 tiles, longest list first
+                   claim,       # [1] int64 work counter (set to 0 here)
+                   keys, keys2,  # [n_threads, max_len] uint sort scratch
+                   idx, idx2,   # [n_threads, max_len] int32 sort scratch
                    tile_start,  # [n_tiles + 1] int64
                    lst,         # [n_entries] int32 (each tile's segment is depth-sorted in place)
                    rec,         # [N, 16]
@@ -223,12 +230,12 @@ def raster_forward(assign,      # [n_threads, n_tiles] int32
                    feat_out,    # [H, W, D] out
                    tfinal,      # [H, W] out, written when save
                    last_out,    # [H, W] int32 out, written when save
-                   save,
-                   keys, keys2,  # [n_threads, max_len] uint sort scratch
-                   idx, idx2):   # [n_threads, max_len] int32 sort scratch
-    """Sort each tile's list by depth, then composite it; thread k renders tiles assign[k, :nper[k]]."""
-    nthr = assign.shape[0]
+                   save):
+    """Sort each tile's list by depth, then composite it. Tiles are claimed one at a time from
+    `order` by whichever thread is free (each tile's result is independent of the thread)."""
+    nthr = keys.shape[0]
+    claim[0] = 0
     for k in prange(nthr):
-        _raster_tiles(assign[k], nper[k], tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
+        _raster_tiles(order, claim, tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
                       rgb, depth, alpha, inst, feat_out, tfinal, last_out, save,
                       keys[k], keys2[k], idx[k], idx2[k])

@@ -1,12 +1,13 @@
 """Per-camera orchestration of the forward kernels, and `rasterize_numpy` (the env hot path).
 
-One camera = project (parallel) -> bin offsets -> bin fill (parallel) -> plan threads ->
-sort + composite per tile (parallel). `render_camera` runs these stages and returns what the
+One camera = project (parallel) -> bin offsets -> bin fill (parallel) -> order the tiles ->
+sort + composite per tile (parallel, tiles claimed longest first). `render_camera` runs these stages and returns what the
 backward pass needs (`FrameState`).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass
@@ -20,7 +21,7 @@ from .binning import bin_fill, bin_offsets, plan_tiles
 from .forward import raster_forward
 from .projection import project_forward
 
-__all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer"]
+__all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer", "Workspace"]
 
 _KEY_DTYPE = {np.dtype(np.float32): np.uint32, np.dtype(np.float64): np.uint64}
 _MAX_TILE_LIST = {np.dtype(np.float32): 1 << 24, np.dtype(np.float64): 1 << 53}
@@ -31,19 +32,54 @@ class FrameState:
     """What one camera's forward pass leaves for its backward pass.
 
     rec [N, 16] projected records; tile_start [n_tiles + 1] and lst [n_entries] the depth-sorted
-    per-tile lists; assign [n_threads, n_tiles] / nper [n_threads] the thread plan; tfinal [H, W]
-    final transmittance; last [H, W] int32 per-pixel stop position in its tile's list.
+    per-tile lists; order [n_tiles] the tiles longest list first; tfinal [H, W] final
+    transmittance; last [H, W] int32 per-pixel stop position in its tile's list.
     """
 
     rec: np.ndarray
     tile_start: np.ndarray
     lst: np.ndarray
-    assign: np.ndarray
-    nper: np.ndarray
+    order: np.ndarray
     max_len: int
     tiles_x: int
     tfinal: Optional[np.ndarray]
     last: Optional[np.ndarray]
+
+
+class Workspace:
+    """Scratch buffers reused across calls (grow-only), so that a steady stream of frames does
+    not pay page faults on megabytes of fresh memory each frame. One per Python thread."""
+
+    def __init__(self) -> None:
+        self._bufs: dict[str, np.ndarray] = {}
+        self._views: dict[tuple, np.ndarray] = {}
+
+    def get(self, name: str, shape: tuple, dtype) -> np.ndarray:
+        key = (name, shape, dtype)
+        view = self._views.get(key)
+        if view is not None:
+            return view
+        size = math.prod(shape)
+        dt = np.dtype(dtype)
+        buf = self._bufs.get(name)
+        if buf is None or buf.dtype != dt or buf.size < size:
+            buf = np.empty(max(size + size // 4, 16), dt)
+            self._bufs[name] = buf
+            self._views = {k: v for k, v in self._views.items() if k[0] != name}
+        if len(self._views) > 64:
+            self._views.clear()
+        view = self._views[key] = buf[:size].reshape(shape)
+        return view
+
+
+_LOCAL = threading.local()
+
+
+def _workspace() -> Workspace:
+    ws = getattr(_LOCAL, "ws", None)
+    if ws is None:
+        ws = _LOCAL.ws = Workspace()
+    return ws
 
 
 class StageTimer:
@@ -68,8 +104,15 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
                   near: float, width: int, height: int,
                   bg,        # [3]
                   rgb, depth, alpha, inst, feat_out,   # output views for this camera
-                  save: bool = False, timer: Optional[StageTimer] = None) -> Optional[FrameState]:
-    """Render one camera into the given output views; with `save`, return the backward state."""
+                  save: bool = False, timer: Optional[StageTimer] = None,
+                  ws: Optional[Workspace] = None) -> Optional[FrameState]:
+    """Render one camera into the given output views; with `save`, return the backward state.
+
+    Scratch comes from `ws` when given (forward-only use), else is freshly allocated (the
+    backward pass keeps it).
+    """
+    if ws is None:
+        ws = Workspace()
     dtype = means.dtype
     F = dtype.type
     n = means.shape[0]
@@ -79,20 +122,20 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     ntiles = tiles_x * tiles_y
     if timer:
         timer.start()
-    rec = np.empty((n, NREC), dtype)
-    trect = np.empty((4, n), np.int32)
-    counts = np.empty((nthr, ntiles), np.int32)
-    project_forward(means, quats, scales, opacities, colors, viewmat, K, width, height, F(near),
+    rec = ws.get("rec", (n, NREC), dtype)
+    trect = ws.get("trect", (4, n), np.int32)
+    counts = ws.get("counts", (nthr, ntiles), np.int32)
+    project_forward(means, quats, scales, opacities, colors, feat, viewmat, K, width, height, F(near),
                     rec, trect, tiles_x, counts)
     if timer:
         timer.lap("project")
-    tile_start = np.empty(ntiles + 1, np.int64)
-    thread_off = np.empty((nthr, ntiles), np.int64)
+    tile_start = ws.get("tile_start", (ntiles + 1,), np.int64)
+    thread_off = ws.get("thread_off", (nthr, ntiles), np.int64)
     total = bin_offsets(counts, tile_start, thread_off)
-    lst = np.empty(total, np.int32)
+    lst = ws.get("lst", (total,), np.int32)
     bin_fill(trect, tiles_x, thread_off, lst)
-    assign = np.empty((nthr, ntiles), np.int32)
-    nper, max_len = plan_tiles(tile_start, nthr, assign)
+    order = ws.get("order", (ntiles,), np.int32)
+    max_len = plan_tiles(tile_start, order)
     if max_len >= _MAX_TILE_LIST[dtype]:
         raise ValueError(f"Expected at most {_MAX_TILE_LIST[dtype] - 1} Gaussians over one 16x16 tile in "
                          f"{dtype.name}, found {max_len} (list positions are kept as floats)")
@@ -100,33 +143,35 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
         timer.lap("bin")
     kd = _KEY_DTYPE[dtype]
     m = max(int(max_len), 1)
-    keys = np.empty((nthr, m), kd)
-    keys2 = np.empty((nthr, m), kd)
-    idx = np.empty((nthr, m), np.int32)
-    idx2 = np.empty((nthr, m), np.int32)
+    keys = ws.get("keys", (nthr, m), kd)
+    keys2 = ws.get("keys2", (nthr, m), kd)
+    idx = ws.get("idx", (nthr, m), np.int32)
+    idx2 = ws.get("idx2", (nthr, m), np.int32)
     if save:
         tfinal = np.empty((height, width), dtype)
         last = np.empty((height, width), np.int32)
     else:
         tfinal = _DUMMY_F[dtype]
         last = _DUMMY_I
-    raster_forward(assign, nper, tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
-                   rgb, depth, alpha, inst, feat_out, tfinal, last, save, keys, keys2, idx, idx2)
+    raster_forward(order, ws.get("claim", (1,), np.int64), keys, keys2, idx, idx2, tile_start, lst, rec, ids, feat,
+                   width, height, tiles_x, bg, rgb, depth, alpha, inst, feat_out, tfinal, last, save)
     if timer:
         timer.lap("raster")
     if not save:
         return None
-    return FrameState(rec, tile_start, lst, assign, nper, int(max_len), tiles_x, tfinal, last)
+    return FrameState(rec, tile_start, lst, order, int(max_len), tiles_x, tfinal, last)
 
 
 _DUMMY_F = {np.dtype(np.float32): np.empty((1, 1), np.float32), np.dtype(np.float64): np.empty((1, 1), np.float64)}
 _DUMMY_I = np.empty((1, 1), np.int32)
 
 
-def _f32(x, shape_tail, name):
-    a = np.ascontiguousarray(x, dtype=np.float32)
-    if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
-        raise ValueError(f"Expected {name} of shape (N, {', '.join(map(str, shape_tail))}), found {a.shape}")
+def _as(x, dtype, shape: tuple, name: str) -> np.ndarray:
+    """C-contiguous array of `dtype` with `shape` (-1 entries free), else ValueError naming `name`."""
+    a = np.ascontiguousarray(x, dtype=dtype)
+    if a.ndim != len(shape) or any(s != -1 and s != t for s, t in zip(shape, a.shape)):
+        want = "(" + ", ".join("*" if s == -1 else str(s) for s in shape) + ")"
+        raise ValueError(f"Expected {name} of shape {want}, found {a.shape}")
     return a
 
 
@@ -162,35 +207,33 @@ def rasterize_numpy(means,        # [N, 3]
         >>> out["rgb"].shape, out["instance"].dtype  # doctest: +SKIP
         ((1, 48, 64, 3), dtype('int32'))
     """
-    means = _f32(means, (3,), "means")
+    f32 = np.float32
+    means = _as(means, f32, (-1, 3), "means")
     n = means.shape[0]
-    quats = _f32(quats, (4,), "quats")
-    scales = _f32(scales, (3,), "scales")
-    opacities = np.ascontiguousarray(opacities, dtype=np.float32).reshape(n)
-    colors = _f32(colors, (3,), "colors")
-    viewmats = np.asarray(viewmats, dtype=np.float32).reshape(-1, 4, 4)
+    quats = _as(quats, f32, (n, 4), "quats")
+    scales = _as(scales, f32, (n, 3), "scales")
+    opacities = _as(opacities, f32, (n,), "opacities")
+    colors = _as(colors, f32, (n, 3), "colors")
+    viewmats = _as(viewmats, f32, (-1, 4, 4), "viewmats")
     C = viewmats.shape[0]
-    Ks = np.asarray(Ks, dtype=np.float32).reshape(C, 3, 3)
+    Ks = _as(Ks, f32, (C, 3, 3), "Ks")
     width = int(width)
     height = int(height)
-    if features is None:
-        feat = np.empty((n, 0), np.float32)
-    else:
-        feat = np.ascontiguousarray(features, dtype=np.float32).reshape(n, -1)
+    if width < 1 or height < 1:
+        raise ValueError(f"Expected a positive image size, found {width}x{height}")
+    feat = np.empty((n, 0), f32) if features is None else _as(features, f32, (n, -1), "features")
     D = feat.shape[1]
-    if object_ids is None:
-        ids = np.full(n, -1, np.int32)
-    else:
-        ids = np.ascontiguousarray(object_ids, dtype=np.int32).reshape(n)
-    bg = np.zeros(3, np.float32) if background is None else np.asarray(background, dtype=np.float32).reshape(3)
-    near = np.full(C, 0.01) if nears is None else np.asarray(nears, dtype=np.float64).reshape(C)
+    ids = np.full(n, -1, np.int32) if object_ids is None else _as(object_ids, np.int32, (n,), "object_ids")
+    bg = np.zeros(3, f32) if background is None else _as(background, f32, (3,), "background")
+    near = np.full(C, 0.01) if nears is None else _as(nears, np.float64, (C,), "nears")
     rgb = np.empty((C, height, width, 3), np.float32)
     depth = np.empty((C, height, width), np.float32)
     alpha = np.empty((C, height, width), np.float32)
     inst = np.empty((C, height, width), np.int32)
     fout = np.empty((C, height, width, D), np.float32)
+    ws = _workspace()
     for c in range(C):
         render_camera(means, quats, scales, opacities, colors, feat, ids, viewmats[c], Ks[c], float(near[c]),
-                      width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer)
+                      width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer, ws=ws)
     return {"rgb": rgb, "depth": depth, "alpha": alpha, "instance": inst,
             "features": fout if features is not None else None}

@@ -165,14 +165,20 @@ def _project_block(lo, hi,
                    scales,      # [N, 3]
                    opacities,   # [N]
                    colors,      # [N, 3]
+                   feat,        # [N, D] (checked finite only)
                    viewmat,     # [4, 4]
                    K,           # [3, 3]
                    width, height, near,
                    buf,         # [_NFIELD * _BLOCK] scratch
                    rec,         # [N, 16] out
-                   trect):      # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
+                   trect,       # [4, N] int32 out: tile x0, x1, y0, y1 inclusive (x1 = -1 when culled)
+                   tiles_x,
+                   counts):     # [n_tiles] int32 out (+=)
     n = hi - lo
     B = _BLOCK
+    F = rec.dtype.type
+    one = F(1.0)
+    inf = F(np.inf)
     for j in range(n):
         i = lo + j
         buf[_IN_M0 * B + j] = means[i, 0]
@@ -196,33 +202,38 @@ def _project_block(lo, hi,
         rec[i, R_CC] = buf[_OUT_CC * B + j]
         rec[i, R_OP] = buf[_IN_OP * B + j]
         rec[i, R_Z] = buf[_OUT_Z * B + j]
-        rec[i, R_R] = colors[i, 0]
-        rec[i, R_G] = colors[i, 1]
-        rec[i, R_B] = colors[i, 2]
+        cr = colors[i, 0]
+        cg = colors[i, 1]
+        cb = colors[i, 2]
+        rec[i, R_R] = cr
+        rec[i, R_G] = cg
+        rec[i, R_B] = cb
         rec[i, R_EX] = buf[_OUT_EX * B + j]
         rec[i, R_EY] = buf[_OUT_EY * B + j]
         bx0 = buf[_OUT_X0 * B + j]
         bx1 = buf[_OUT_X1 * B + j]
         by0 = buf[_OUT_Y0 * B + j]
         by1 = buf[_OUT_Y1 * B + j]
+        # a non-finite colour or feature would turn pixels NaN: cull the Gaussian instead
+        finite = (abs(cr) < inf) & (abs(cg) < inf) & (abs(cb) < inf)
+        for d in range(feat.shape[1]):
+            finite &= abs(feat[i, d]) < inf
+        if not finite:
+            bx1 = -one
+            by1 = -one
         rec[i, R_X0] = bx0
         rec[i, R_X1] = bx1
         rec[i, R_Y0] = by0
         rec[i, R_Y1] = by1
         # tile rectangle (inclusive); culled Gaussians get x1 = -1 < x0 = 0
-        trect[0, i] = np.int32(bx0) >> np.int32(4)
-        trect[1, i] = np.int32(bx1) >> np.int32(4)
-        trect[2, i] = np.int32(by0) >> np.int32(4)
-        trect[3, i] = np.int32(by1) >> np.int32(4)
-
-
-@jit
-def _count_block(lo, hi, trect, tiles_x, counts):
-    for i in range(lo, hi):
-        tx0 = trect[0, i]
-        tx1 = trect[1, i]
-        ty0 = trect[2, i]
-        ty1 = trect[3, i]
+        tx0 = np.int32(bx0) >> np.int32(4)
+        tx1 = np.int32(bx1) >> np.int32(4)
+        ty0 = np.int32(by0) >> np.int32(4)
+        ty1 = np.int32(by1) >> np.int32(4)
+        trect[0, i] = tx0
+        trect[1, i] = tx1
+        trect[2, i] = ty0
+        trect[3, i] = ty1
         if tx1 < tx0:
             continue
         if tx0 == tx1 and ty0 == ty1:   # single tile: the common case
@@ -234,15 +245,14 @@ def _count_block(lo, hi, trect, tiles_x, counts):
 
 
 @jit
-def _project_range(lo, hi, means, quats, scales, opacities, colors, viewmat, K, width, height, near,
+def _project_range(lo, hi, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near,
                    rec, trect, tiles_x, counts):
     counts[:] = 0
     buf = np.empty(_NFIELD * _BLOCK, rec.dtype)
     for b in range(lo, hi, _BLOCK):
         e = min(b + _BLOCK, hi)
-        _project_block(b, e, means, quats, scales, opacities, colors, viewmat, K, width, height, near, buf, rec,
-                       trect)
-        _count_block(b, e, trect, tiles_x, counts)
+        _project_block(b, e, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near, buf,
+                       rec, trect, tiles_x, counts)
 
 
 @pjit
@@ -251,6 +261,7 @@ def project_forward(means,      # [N, 3]
                     scales,     # [N, 3]
                     opacities,  # [N]
                     colors,     # [N, 3]
+                    feat,       # [N, D]
                     viewmat,    # [4, 4]
                     K,          # [3, 3]
                     width, height, near,
@@ -263,12 +274,13 @@ def project_forward(means,      # [N, 3]
     Writes one record per Gaussian into `rec` [N, 16] (layout `_jit.R_*`), its inclusive tile
     rectangle into `trect` [4, N] (tx0, tx1, ty0, ty1; tx1 = -1 when culled) and, per
     chunk, the number of Gaussians touching each tile into `counts` [n_threads, n_tiles].
+    Gaussians with a non-finite colour or feature are culled (they would make pixels NaN).
     """
     n = means.shape[0]
     nthr = counts.shape[0]
     for t in prange(nthr):
-        _project_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, opacities, colors, viewmat, K,
-                       width, height, near, rec, trect, tiles_x, counts[t])
+        _project_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, opacities, colors, feat, viewmat,
+                       K, width, height, near, rec, trect, tiles_x, counts[t])
 
 
 @jit
@@ -280,8 +292,8 @@ def _project_backward_range(lo, hi,
                             K,          # [3, 3]
                             width, height,
                             rec,        # [N, 16] forward records (culled ones have X1 < X0)
-                            grad2d,     # [n_threads, N, 10] per-thread 2D gradients (backward.G_*)
-                            gfeat2d,    # [n_threads, N, D]
+                            grad2d,     # [N, 10] 2D gradients (columns backward.G_*)
+                            gfeat2d,    # [N, D]
                             g_means,    # [N, 3] out (+=)
                             g_quats,    # [N, 4] out (+=)
                             g_scales,   # [N, 3] out (+=)
@@ -289,8 +301,7 @@ def _project_backward_range(lo, hi,
                             g_colors,   # [N, 3] out (+=)
                             g_feat):    # [N, D] out (+=)
     F = rec.dtype.type
-    nthr = grad2d.shape[0]
-    D = gfeat2d.shape[2]
+    D = gfeat2d.shape[1]
     fx = K[0, 0]
     fy = K[1, 1]
     r00, r01, r02, t0 = viewmat[0, 0], viewmat[0, 1], viewmat[0, 2], viewmat[0, 3]
@@ -314,36 +325,18 @@ def _project_backward_range(lo, hi,
     for i in range(lo, hi):
         if rec[i, R_X1] < rec[i, R_X0]:
             continue   # culled: never rasterised, no gradient
-        gmx = zero
-        gmy = zero
-        gia = zero
-        gib = zero
-        gic = zero
-        gop = zero
-        gz = zero
-        gr = zero
-        gg = zero
-        gb = zero
-        for t in range(nthr):
-            gmx += grad2d[t, i, 0]
-            gmy += grad2d[t, i, 1]
-            gia += grad2d[t, i, 2]
-            gib += grad2d[t, i, 3]
-            gic += grad2d[t, i, 4]
-            gop += grad2d[t, i, 5]
-            gz += grad2d[t, i, 6]
-            gr += grad2d[t, i, 7]
-            gg += grad2d[t, i, 8]
-            gb += grad2d[t, i, 9]
-        g_opac[i] += gop
-        g_colors[i, 0] += gr
-        g_colors[i, 1] += gg
-        g_colors[i, 2] += gb
+        gmx = grad2d[i, 0]
+        gmy = grad2d[i, 1]
+        gia = grad2d[i, 2]
+        gib = grad2d[i, 3]
+        gic = grad2d[i, 4]
+        g_opac[i] += grad2d[i, 5]
+        gz = grad2d[i, 6]
+        g_colors[i, 0] += grad2d[i, 7]
+        g_colors[i, 1] += grad2d[i, 8]
+        g_colors[i, 2] += grad2d[i, 9]
         for d in range(D):
-            s = zero
-            for t in range(nthr):
-                s += gfeat2d[t, i, d]
-            g_feat[i, d] += s
+            g_feat[i, d] += gfeat2d[i, d]
         # ---- recompute the forward quantities (same formulas as _project_soa)
         m0 = means[i, 0]
         m1 = means[i, 1]
@@ -472,26 +465,25 @@ def _project_backward_range(lo, hi,
 
 
 @pjit
-def project_backward(means,      # [N, 3]
+def project_backward(nthr,
+                     means,      # [N, 3]
                      quats,      # [N, 4]
                      scales,     # [N, 3]
                      viewmat,    # [4, 4]
                      K,          # [3, 3]
                      width, height,
                      rec,        # [N, 16]
-                     grad2d,     # [n_threads, N, 10]
-                     gfeat2d,    # [n_threads, N, D]
+                     grad2d,     # [N, 10]
+                     gfeat2d,    # [N, D]
                      g_means,    # [N, 3] out (+=)
                      g_quats,    # [N, 4] out (+=)
                      g_scales,   # [N, 3] out (+=)
                      g_opac,     # [N] out (+=)
                      g_colors,   # [N, 3] out (+=)
                      g_feat):    # [N, D] out (+=)
-    """Chain the per-thread 2D gradients (mean2d, conic, opacity, depth, colour, features) of one
-    camera back to the 3D parameters, adding into the g_* arrays. Twin of autograd through
-    `project_torch`."""
+    """Chain one camera's 2D gradients (mean2d, conic, opacity, depth, colour, features) back to
+    the 3D parameters, adding into the g_* arrays. Twin of autograd through `project_torch`."""
     n = means.shape[0]
-    nthr = grad2d.shape[0]
     for t in prange(nthr):
         _project_backward_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, viewmat, K, width,
                                 height, rec, grad2d, gfeat2d, g_means, g_quats, g_scales, g_opac, g_colors, g_feat)

@@ -1,0 +1,65 @@
+"""Generate the MorphoSim paper's scenes from their prompts, apply the paper's edits, write videos.
+
+    python examples/paper_scenes.py --out out/demo [--reconstruct] [--size 128]
+
+For each prompt of the paper's figures this writes `NN_name.mp4`: the generation view (left) and
+a 30-degree novel view (right), before (top) and after (bottom) the paper's edit of that scene. With `--reconstruct` scenes are fitted from their clips (about two minutes
+each) instead of taken from the generator's ground truth.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+import morphosim_gym as ms
+from morphosim_gym.edit import scene_centre
+from morphosim_gym.generate.cli import write_video
+
+# (prompt, edit) pairs from the captions of the paper's figures
+PAPER = [
+    ("The fish swims through the crystal-clear waters from right to left", "Make the color of the fish and seaweed black."),
+    ("The bus is moving from right to left", "Make the bus yellow."),
+    ("A serene boat glides gracefully through tranquil waters from left to right", "Extract the boat."),
+    ("A car is moving from right to left through a serene sunlit landscape", "Extract the car."),
+    ("A small, vibrant red rubber ball is bouncing from right to left", "Delete the ball."),
+    ("A sleek black motorcycle is gliding effortlessly from right to left", "Delete the motorcycle."),
+    ("a red cube moves to the plate while the camera circles the table", "make the cube blue and reverse its motion"),
+]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default="out/demo")
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--reconstruct", action="store_true", help="fit scenes from clips instead of the ground truth")
+    args = ap.parse_args()
+    out = Path(args.out)
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=args.size, height=args.size),
+                       reconstruction="fit" if args.reconstruct else "oracle")
+    for k, (prompt, edit) in enumerate(PAPER):
+        start = time.perf_counter()
+        clip = sim.generate_clip(prompt, seed=0)
+        scene = sim.reconstruct(clip)
+        made = time.perf_counter() - start
+        start = time.perf_counter()
+        edited = sim.edit(scene, edit)
+        edit_ms = 1000 * (time.perf_counter() - start)
+        novel = scene.camera.orbit(30.0, scene_centre(scene))
+        frames = []
+        for i in range(clip.num_frames):
+            t = i / clip.fps
+            after = ms.render(edited, edited.camera_at(t), t).rgb_uint8()
+            side = ms.render(edited, novel, t).rgb_uint8()
+            top = np.concatenate([clip.frames[i], ms.render(scene, novel, t).rgb_uint8()], axis=1)
+            frames.append(np.concatenate([top, np.concatenate([after, side], axis=1)], axis=0))
+        name = "_".join(prompt.lower().split()[1:3]).strip(",.")
+        path = write_video(frames, out / f"{k:02d}_{name}.mp4", clip.fps)
+        print(f"{path}: generated in {made:.1f} s, edit {edit!r} in {edit_ms:.1f} ms -> objects {edited.object_names}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,120 @@
+"""Reconstruction from a clip alone: contract, quality on a small clip, cache, determinism, bad input."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import morphosim_gym as ms
+from morphosim_gym.reconstruct import ReconstructionConfig, quality_report, reconstruct
+from morphosim_gym.reconstruct.features import FeatureConfig
+from morphosim_gym.reconstruct.fit import FitConfig
+
+SMALL = ms.GenerationConfig(width=48, height=48, num_frames=9, detail=0.5)
+FAST = ReconstructionConfig(fit=FitConfig(iterations=120, progress=False),
+                            features=FeatureConfig(iterations=60, progress=False), progress=False, cache=False)
+
+
+@pytest.fixture(scope="module")
+def clip():
+    sim = ms.MorphoSim(generation=SMALL, reconstruction="oracle")
+    return sim.generate_clip("The bus is moving from right to left", seed=0)
+
+
+@pytest.fixture(scope="module")
+def scene(clip):
+    return reconstruct(clip, FAST)
+
+
+def test_scene_contract(clip, scene):
+    assert isinstance(scene, ms.Scene4D)
+    assert scene.num_frames == clip.num_frames and scene.fps == clip.fps
+    assert [o.name for o in scene.objects] == ["road", "bus"]
+    assert scene.object("bus").dynamic and not scene.object("road").dynamic
+    assert scene.object("road").role == "background"
+    assert scene.gaussians.feature_dim == 32 and {"semantic", "color"} <= set(scene.decoders)
+    assert scene.motion.num_nodes >= 1 and set(scene.motion.node_objects.tolist()) == {1}
+
+
+def test_fits_the_input_views_and_the_instances(clip, scene):
+    report = quality_report(clip, scene, frame_stride=2)
+    assert report["input"]["psnr"] > 26.0            # a short fit on a tiny clip; the bars are for full clips
+    assert min(report["instance_iou"].values()) > 0.8
+    for name, pr in report["semantic"].items():
+        assert pr["precision"] > 0.9 and pr["recall"] > 0.9, name
+    # the bus moves in the reconstruction as in the clip
+    c0, c1 = scene.object_center("bus", 0.0), scene.object_center("bus", scene.duration)
+    g0, g1 = clip.ground_truth.object_center("bus", 0.0), clip.ground_truth.object_center("bus", scene.duration)
+    assert np.dot(c1 - c0, g1 - g0) / (np.linalg.norm(c1 - c0) * np.linalg.norm(g1 - g0)) > 0.95
+
+
+def test_edits_select_through_the_feature_field(scene):
+    sim = ms.MorphoSim(reconstruction="oracle")
+    sel = sim.editor.selector.select(scene, [scene.object("bus").id], "bus")
+    assert sel.method == "feature_field"
+    truth = scene.gaussians.object_ids == scene.object("bus").id
+    precision = (sel.mask & truth).sum() / max(sel.mask.sum(), 1)
+    recall = (sel.mask & truth).sum() / truth.sum()
+    assert precision >= 0.95 and recall >= 0.95
+    yellow = sim.edit(scene, "make the vehicle yellow")
+    assert yellow.undo() is scene
+
+
+def test_deterministic_and_cached(clip, tmp_path):
+    cfg = replace(FAST, fit=replace(FAST.fit, iterations=30), features=replace(FAST.features, iterations=10),
+                  cache=True, cache_dir=str(tmp_path))
+    a = reconstruct(clip, cfg)
+    files = list(tmp_path.iterdir())
+    assert len(files) == 1 and files[0].suffix == ".msim"
+    start = time.perf_counter()
+    b = reconstruct(clip, cfg)
+    assert time.perf_counter() - start < 2.0                        # loaded, not fitted
+    assert b.content_hash() == a.content_hash()
+    c = reconstruct(clip, replace(cfg, cache=False))
+    assert c.content_hash() == a.content_hash()                     # same seed: same scene
+
+
+def test_bad_clips_fail_before_any_work(clip):
+    no_depth = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, masks=clip.masks,
+                                labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
+    with pytest.raises(ValueError, match="depth"):
+        reconstruct(no_depth, FAST)
+    zero = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, depth=np.zeros_like(clip.depth),
+                            masks=clip.masks, labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
+    with pytest.raises(ValueError, match="positive depth"):
+        reconstruct(zero, FAST)
+    with pytest.raises(ValueError, match="GeneratedClip"):
+        reconstruct("clip.mclip", FAST)
+    with pytest.raises(ValueError, match="finite depth"):
+        ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps,
+                         depth=np.full(clip.depth.shape, np.nan, np.float32))
+
+
+@pytest.mark.slow
+def test_interrupted_run_leaves_no_cache_entry(clip, tmp_path):
+    path = tmp_path / "clip.mclip"
+    ms.save_clip(clip, path)
+    cache = tmp_path / "cache"
+    env = dict(os.environ, MORPHOSIM_CACHE=str(cache))
+    proc = subprocess.Popen([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--out",
+                             str(tmp_path / "out.msim")], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(8.0)
+    proc.send_signal(signal.SIGINT)               # Ctrl-C mid-fit...
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()                               # ...or, harsher, a kill
+        proc.wait(timeout=30)
+    entries = list(cache.rglob("*.msim")) if cache.exists() else []
+    assert entries == []                          # no cache entry, broken or not (temporary files are never read)
+    assert not (tmp_path / "out.msim").exists()
+    # the next run fits from scratch and caches a readable scene
+    ok = subprocess.run([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--iterations", "5", "--feature-iterations", "5",
+                         "--out", str(tmp_path / "out.msim")], env=env, capture_output=True, text=True, timeout=600)
+    assert ok.returncode == 0, ok.stderr
+    assert ms.load_scene(tmp_path / "out.msim").num_frames == clip.num_frames
