@@ -87,7 +87,7 @@ class FindEnv(MorphoSimEnv):
     | `cameras` | `tuple[str, ...] \\| None` | `None` | rig cameras to observe; None = `("eye",)` |
     | `control_hz` | `float` | `10.0` | control rate; scene time advances 1 / control_hz per step |
     | `detail` | `float` | `0.35` | Gaussian budget multiplier of generated scenes (0.35: as sharp as 0.5 at 84 px, ~25% faster) |
-    | `reconstruction` | `str` | `"oracle"` | how a clip becomes a scene (`MorphoSim` config) |
+    | `reconstruction` | `str` | `"oracle"` | how a clip becomes a scene: `"oracle"` (the generator's ground truth, fast) or `"fit"` (real reconstruction, minutes per scene, cached on disk) |
     | `render_agent` | `bool \\| None` | `None` | draw the camera body; None = task default (False) |
     | `terminate_on_success` | `bool` | `True` | terminate when the target has been found |
     | `on_edit_error` | `str` | `"raise"` | failed edits: `"raise"`, or `"skip"` and go on with the unedited scene |

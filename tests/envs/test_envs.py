@@ -270,7 +270,7 @@ def test_camera_override_sets_the_start_view():
 
 # ------------------------------------------------------------------ scene sources and pools
 def test_oracle_fast_path_gives_the_same_scene_as_generate():
-    sim = ms.MorphoSim(generation=ms.GenerationConfig(detail=0.25))
+    sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.25))
     src = SceneSource(sim)
     a = src.get(PROMPT, 3)
     b = sim.generate(PROMPT, seed=3)

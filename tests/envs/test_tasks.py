@@ -95,7 +95,7 @@ def test_sampling_is_seeded_and_articles_agree():
 def test_scene_distribution_prompts_generate_with_their_target(name):
     """Every sampled prompt parses and generates, and the target is the named object (with its colour)."""
     spec = load_task_spec(name)
-    sim = ms.MorphoSim(generation=ms.GenerationConfig(detail=0.2))
+    sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.2))
     from morphosim_gym.envs.core import SceneSource
 
     src = SceneSource(sim)
@@ -116,7 +116,7 @@ def test_scene_distribution_prompts_generate_with_their_target(name):
 @pytest.mark.parametrize("name", ["track", "reach", "find"])
 def test_scene_distribution_many_prompts(name):
     spec = load_task_spec(name)
-    sim = ms.MorphoSim(generation=ms.GenerationConfig(detail=0.2))
+    sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.2))
     from morphosim_gym.envs.core import SceneSource
 
     src = SceneSource(sim)
