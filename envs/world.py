@@ -34,8 +34,8 @@ class SceneWorld:
         self.target = target
         self._cached_key: tuple = ()
         self._cached_pos = np.zeros(3)
-        self._scene = scene
-        self._index = np.flatnonzero(scene.gaussians.object_ids == target.id)
+        self._scene = self._original = scene
+        self._index = self._original_index = np.flatnonzero(scene.gaussians.object_ids == target.id)
         if self._index.size == 0:
             raise ValueError(f"Expected Gaussians for the target {target.name!r}, found none")
         g0 = scene._at_shared(0.0)
@@ -97,11 +97,11 @@ class SceneWorld:
         return self._cached_pos.copy()
 
     def target_path(self, n: int = 25) -> np.ndarray:
-        """[n, 3] target positions at n evenly spaced times over the clip."""
+        """[n, 3] target positions at n evenly spaced times over the clip (in the scene as it was
+        before any edit if an edit removed the target)."""
+        scene = self._scene if self._index.size else self._original
+        index = self._index if self._index.size else self._original_index
         times = np.linspace(0.0, self.duration, n)
-        pts = [self.target_position(float(t)) for t in times]
-        if pts[0] is None:
-            raise ValueError(f"Expected the target {self.target.name!r} in the scene, found it removed")
-        out = np.array(pts)
-        self._scene._at_shared(self.t)      # leave the scene's cache at the current time
+        out = np.array([scene._at_shared(float(t)).means[index].mean(axis=0, dtype=np.float64) for t in times])
+        scene._at_shared(self.t)            # leave the scene's cache at the current time
         return out
