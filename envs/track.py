@@ -52,7 +52,8 @@ class TrackEnv(MorphoSimEnv):
     ## Rewards
 
     `reward = reward_centred + reward_framing + reward_ctrl`, in [-0.02, 1]:
-    - `reward_centred = 0.8 * c`, with `c = tolerance(d, (0, 0.15), margin=0.6)` and `d` the
+    - `reward_centred = 0.8 * c`, with `c = tolerance(d, (0, 0.15), margin=0.5, sigmoid="long_tail")`
+      (1 inside the radius, 0.55 at twice it, a dense signal across the image) and `d` the
       distance of the target's projected centre from the image centre in half-image units;
     - `reward_framing = 0.2 * c * tolerance(size, (0.12, 0.6), margin=0.15)`, with `size` the
       target's apparent diameter as a fraction of the image height;

@@ -2,7 +2,7 @@
 random policy on held-out scenes.
 
     pip install -e ".[train]"            # stable-baselines3
-    python examples/train_ppo_track.py                       # ~20-25 min on a 2-core CPU
+    python examples/train_ppo_track.py                       # 12-23 min on a 2-core CPU
     python examples/train_ppo_track.py --timesteps 20000 --budget-min 5   # a quick look
 
 What it does:
@@ -39,9 +39,7 @@ def make_env(pool_seed: int, pool: int, size: int):
     from morphosim_gym.envs import RGBObservation
 
     def thunk():
-        # detail=0.5: the committed run used it (the env default was 0.5 then; it is 0.35 now)
-        env = gym.make("MorphoSim/Track-v0", width=size, height=size, scene_pool=pool, pool_seed=pool_seed,
-                       render_threads=1, detail=0.5)
+        env = gym.make("MorphoSim/Track-v0", width=size, height=size, scene_pool=pool, pool_seed=pool_seed)
         return RGBObservation(env)
 
     return thunk
@@ -69,7 +67,7 @@ def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--timesteps", type=int, default=150_000)
+    ap.add_argument("--timesteps", type=int, default=200_000)
     ap.add_argument("--budget-min", type=float, default=21.0, help="wall-clock cap on training, minutes")
     ap.add_argument("--n-envs", type=int, default=8)
     ap.add_argument("--size", type=int, default=64)

@@ -8,7 +8,7 @@ Reward (sum of terms, in [-ctrl_cost, 1]):
   reward_centred = (1 - framing_weight) * c
   reward_framing = framing_weight * c * f
   reward_ctrl    = -ctrl_cost * mean(action^2)
-with c = tolerance(d, (0, centre_radius), centre_margin) for d the distance of the target's
+with c = tolerance(d, (0, centre_radius), centre_margin, "long_tail") for d the distance of the target's
 projected centre from the image centre in half-image units, and f = tolerance(size,
 (size_min, size_max), size_margin) for size the target's apparent diameter as a fraction of
 the image height (zoom changes it).
@@ -48,7 +48,7 @@ class TrackTask(Task):
         max_zoom_rate_deg=20.0,  # degrees of field of view per second at action +-1
         init_offset=0.6,         # start aim error, in half-fields of view (uniform per axis)
         centre_radius=0.15,      # "centred": within this many half-image units of the centre
-        centre_margin=0.6,
+        centre_margin=0.5,       # long-tailed: 0.55 at twice the radius, still > 0 across the image
         size_min=0.12,           # good apparent size (fraction of the image height)
         size_max=0.6,
         size_margin=0.15,
@@ -112,7 +112,7 @@ class TrackTask(Task):
     def evaluate(self, world: Any, rig: PanTiltRig, view: TaskView, action: np.ndarray) -> Evaluation:
         p = self.params
         m = self.measure(world, rig, view)
-        c = tolerance(m["target_offset"], (0.0, p["centre_radius"]), p["centre_margin"])
+        c = tolerance(m["target_offset"], (0.0, p["centre_radius"]), p["centre_margin"], sigmoid="long_tail")
         f = tolerance(m["target_size"], (p["size_min"], p["size_max"]), p["size_margin"])
         w = p["framing_weight"]
         terms = {"reward_centred": (1.0 - w) * c, "reward_framing": w * c * f,

@@ -143,9 +143,17 @@ def test_a_user_yaml_task_becomes_an_env_id(tmp_path):
 def test_track_reward_favours_the_centre():
     task = TrackTask("track")
     p = task.params
-    centred = tolerance(0.0, (0, p["centre_radius"]), p["centre_margin"])
-    off = tolerance(0.8, (0, p["centre_radius"]), p["centre_margin"])
-    assert centred == 1.0 and off < 0.2
+    env = gym.make("MorphoSim/Track-v0", prompt="a red ball moves from left to right", **FAST)
+    env.reset(seed=0)
+    u = env.unwrapped
+    rewards = []
+    for d in (0.0, 0.3, 0.8):                      # aim off the target by d half-images horizontally
+        target = u.world.target_position()
+        pan = np.arctan(d * np.tan(np.radians(u.rig.fov) / 2))
+        u.rig.aim_at(target, (pan, 0.0))
+        *_, info = env.step(np.zeros(3, np.float32))
+        rewards.append(info["reward_centred"])
+    assert rewards[0] > 0.75 and 0.2 < rewards[1] < 0.6 and 0.0 < rewards[2] < 0.1
     lo, hi = task.reward_range()
     assert lo == -p["ctrl_cost"] and hi == 1.0
 
