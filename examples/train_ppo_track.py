@@ -9,7 +9,8 @@ What it does:
   * training envs: Track-v0 at 64x64 rgb (smaller than the 84x84 default, to fit the CPU
     budget: the CNN update dominates the wall time), a pool of 64 pre-built scenes from the
     task's scene distribution (pool seed 0), the policy sees only the image;
-  * PPO with the default Nature CNN, 8 envs x 128 steps per update; training stops at
+  * PPO with the default Nature CNN on the last 3 frames (VecFrameStack, so the policy sees
+    the motion), 8 envs x 128 steps per update; training stops at
     `--timesteps` or after `--budget-min` minutes of wall time, whichever comes first;
   * evaluation on 32 held-out scenes (a different pool seed, never trained on), 32 episodes
     each for the trained policy (deterministic actions) and a uniform random policy, same
@@ -45,9 +46,18 @@ def make_env(pool_seed: int, pool: int, size: int):
     return thunk
 
 
-def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0: int) -> dict:
-    """Run `episodes` episodes; `policy(obs) -> action`."""
+def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0: int, stack: int = 1) -> dict:
+    """Run `episodes` episodes; `policy(obs) -> action` (obs: the last `stack` frames along channels)."""
     env = make_env(pool_seed, pool, size)()
+    if stack > 1:
+        from gymnasium.wrappers import FrameStackObservation, TransformObservation
+
+        env = FrameStackObservation(env, stack, padding_type="zero")  # [stack, H, W, 3], oldest first, zeros at reset as SB3
+        h, w, c = env.observation_space.shape[1:]
+        import gymnasium as gym
+
+        space = gym.spaces.Box(0, 255, (h, w, c * stack), np.uint8)
+        env = TransformObservation(env, lambda o: np.concatenate(list(o), axis=-1), space)
     succ, frac, ret = [], [], []
     for ep in range(episodes):
         obs, info = env.reset(seed=seed0 + ep)
@@ -73,6 +83,7 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--pool", type=int, default=64)
     ap.add_argument("--eval-episodes", type=int, default=32)
+    ap.add_argument("--frame-stack", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=RESULTS)
     ap.add_argument("--replot", action="store_true", help="only redraw the plot from saved results")
@@ -85,7 +96,7 @@ def main() -> None:
         import torch
         from stable_baselines3 import PPO
         from stable_baselines3.common.callbacks import BaseCallback
-        from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
+        from stable_baselines3.common.vec_env import DummyVecEnv, VecFrameStack, VecMonitor
     except ImportError as exc:  # pragma: no cover
         raise SystemExit("Expected stable-baselines3 for this example, found it missing; "
                          "pip install 'morphosim-gym[train]'") from exc
@@ -96,6 +107,8 @@ def main() -> None:
 
     venv = VecMonitor(DummyVecEnv([make_env(0, args.pool, args.size) for _ in range(args.n_envs)]),
                       info_keywords=("success", "centred_fraction"))
+    if args.frame_stack > 1:
+        venv = VecFrameStack(venv, args.frame_stack)          # the last frames, so the policy sees motion
     venv.seed(args.seed)
     built = time.perf_counter() - start
     print(f"envs ready in {built:.1f}s", flush=True)
@@ -138,7 +151,7 @@ def main() -> None:
 
     t_eval = time.perf_counter()
     trained = evaluate(lambda o: model.predict(o, deterministic=True)[0], 1, 32, args.size, args.eval_episodes,
-                       10_000)
+                       10_000, args.frame_stack)
     rng = np.random.default_rng(12345)
     random = evaluate(lambda o: rng.uniform(-1, 1, 3).astype(np.float32), 1, 32, args.size, args.eval_episodes,
                       10_000)
@@ -149,6 +162,7 @@ def main() -> None:
     result = {
         "env": "MorphoSim/Track-v0", "obs": f"rgb {args.size}x{args.size} only (RGBObservation)",
         "algo": "stable-baselines3 PPO CnnPolicy (NatureCNN)",
+        "frame_stack": args.frame_stack,
         "ppo": {"n_envs": args.n_envs, "n_steps": 128, "batch_size": 256, "n_epochs": 4, "learning_rate": 3e-4,
                 "gamma": 0.95, "gae_lambda": 0.9, "clip_range": 0.2, "ent_coef": 0.0},
         "train_scenes": {"scene_pool": args.pool, "pool_seed": 0},
