@@ -216,6 +216,10 @@ def plot(curve: list[dict], random: dict, trained: dict, path: Path) -> None:
     axes[1].set_ylabel("fraction of steps centred / success rate")
     axes[1].set_ylim(-0.02, 1.02)
     axes[1].legend(fontsize=8, loc="upper left")
+    from matplotlib.ticker import FuncFormatter
+
+    for ax in axes:
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x / 1000:.0f}k"))
     fig.suptitle("MorphoSim/Track-v0, PPO CnnPolicy from pixels (success: centred on >= 70% of steps)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
