@@ -181,6 +181,7 @@ class SceneViewer:
                      "('a bus drives down a road'); Enter runs it.")
             self._buttons = gui.add_button_group("Actions", ("Run", "Undo"))
             self._status = gui.add_markdown("Type an edit (e.g. *make it blue*) or a new scene, then press Enter.")
+            self._latency = gui.add_markdown("")
             self._history = gui.add_markdown(self._history_text())
         with gui.add_folder("Time"):
             step = 1.0 / max(4.0 * scene.fps, 1.0)
@@ -199,7 +200,6 @@ class SceneViewer:
         with gui.add_folder("View", expand_by_default=False):
             self._reset_view = gui.add_button("Reset view")
             self._resolution = gui.add_slider("Resolution", min=128, max=1024, step=32, initial_value=self.long_side)
-            self._stats = gui.add_markdown("")
 
         self._command.on_update(self._on_command_text)
         self._buttons.on_click(self._on_button)
@@ -369,12 +369,12 @@ class SceneViewer:
                   "size": [int(info.image.shape[1]), int(info.image.shape[0])],
                   "gaussians": len(snap.scene.gaussians)}
         self.latencies.append(record)
-        self._stats.content = (f"Last command: {record['total_ms']:.0f} ms from text received to frame sent "
-                               f"(render {info.render_ms:.0f} ms, {record['size'][0]}x{record['size'][1]}, "
-                               f"{record['gaussians']} Gaussians)")
+        self._latency.content = (f"Frame of '{md_escape(p['text'])}' sent {record['total_ms']:.0f} ms after the "
+                                 f"command arrived (render {info.render_ms:.0f} ms at {record['size'][0]}x"
+                                 f"{record['size'][1]}, {record['gaussians']} Gaussians)")
 
     def _frame_failed(self, key: Any, exc: BaseException) -> None:
-        self._stats.content = f"**Error**: frame failed: {md_escape(type(exc).__name__)}: {md_escape(str(exc))}"
+        self._latency.content = f"**Error**: frame failed: {md_escape(type(exc).__name__)}: {md_escape(str(exc))}"
 
     # ================================================================ cameras
     def _set_initial_camera(self) -> None:
