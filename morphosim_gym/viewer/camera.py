@@ -63,14 +63,18 @@ def viewer_pose(camera: Camera) -> tuple[np.ndarray, np.ndarray]:
 
 def viewer_view(camera: Camera, target: Sequence[float]) -> dict:
     """What to assign to a viser camera (`position`, `look_at`, `up_direction`, `fov`) so that it
-    shows what `camera` shows while orbiting about `target` (a point on or near the optical axis;
-    it is moved onto the axis at the same depth)."""
+    shows what `camera` shows (for a camera without roll, as `Camera.look_at` makes) while orbiting
+    about `target` (a point on or near the optical axis; it is moved onto the axis at the same depth)
+    with world z up."""
     c2w = camera.camera_to_world
     pos = c2w[:3, 3]
     forward = c2w[:3, 2]
     depth = float(np.dot(np.asarray(target, dtype=np.float64) - pos, forward))
     look_at = pos + max(depth, 1e-3) * forward
-    up = -c2w[:3, 1]
+    # Orbit about world z (z-up, as our cameras): viser keeps the image's up as close to this as it can,
+    # which gives back the camera's own orientation when it has no roll. Looking straight up or down,
+    # world z says nothing about roll: use the camera's own image up.
+    up = np.array([0.0, 0.0, 1.0]) if abs(forward[2]) < 0.999 else -c2w[:3, 1]
     return {"position": pos.copy(), "look_at": look_at, "up_direction": up, "fov": math.radians(camera.fov_y_deg)}
 
 
