@@ -161,6 +161,25 @@ class SceneViewer:
         finally:
             self.close()
 
+    @property
+    def status(self) -> str:
+        """The command panel's result line (markdown), as the page shows it."""
+        return self._status.content
+
+    @property
+    def panel_text(self) -> str:
+        """Everything the command panel shows: title, result, latency and history (markdown)."""
+        return "\n".join(m.content for m in (self._title, self._status, self._latency, self._history))
+
+    @property
+    def object_toggles(self) -> dict[str, bool]:
+        """The object list as shown: label -> visible."""
+        return {box.label: box.value for box in self._object_boxes}
+
+    def run_command(self, text: str, client: Any = None) -> None:
+        """Run a command as if typed into the page (by `client`, if given)."""
+        self._run_command(text, client)
+
     def wait_idle(self, timeout: float = 10.0) -> bool:
         """Block until every requested frame has been sent (for tests and benchmarks)."""
         return self._frames.wait_idle(timeout)
