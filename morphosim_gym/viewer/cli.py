@@ -15,8 +15,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "a time slider, orbit/pan/zoom, a command box for edits and new prompts with undo, object "
                     "visibility and video recording. With --env, watch an episode of an env with a policy.")
     p.add_argument("source", nargs="?", default=None,
-                   help="a scene file (.msim), a `morphosim generate --out` directory, or a prompt to generate")
+                   help="a scene file (.msim), a `morphosim generate --out` directory, or a prompt to generate "
+                        "(with --env: the prompt of every episode's scene)")
     p.add_argument("--env", default=None, help="watch an env instead, e.g. MorphoSim/Track-v0")
+    p.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
+                   help="with --env: a keyword argument of gym.make, value read as YAML (repeatable), "
+                        "e.g. --env-option detail=1.0")
     p.add_argument("--policy", default="random",
                    help="with --env: 'random' (default), 'zero', or 'module:function' taking (obs, action_space)")
     p.add_argument("--episodes", type=int, default=0, help="with --env: stop after this many episodes (0: never)")
@@ -38,18 +42,25 @@ def _view(args: argparse.Namespace) -> int:
 
     if args.env is None and args.source is None:
         raise ValueError("Expected a scene file, a directory or a prompt to view (or --env ID), found none")
-    if args.env is not None and args.source is not None:
-        raise ValueError(f"Expected either a scene/prompt or --env, found both ({args.source!r} and --env {args.env})")
     if args.env is not None:
+        from .app import import_viser
         from .env_app import EnvViewer, make_policy
 
-        viewer = EnvViewer(args.env, policy=make_policy(args.policy), seed=args.seed, episodes=args.episodes,
-                           host=args.host, port=args.port, long_side=args.resolution, verbose=not args.quiet)
+        import_viser()
+        kwargs = _env_options(args.env_option)
+        if args.source is not None:
+            kwargs["prompt"] = args.source
+        print(f"morphosim view: making {args.env} ...", flush=True)
+        viewer = EnvViewer(args.env, policy=make_policy(args.policy, args.seed), seed=args.seed,
+                           episodes=args.episodes, env_kwargs=kwargs, host=args.host, port=args.port,
+                           long_side=args.resolution, verbose=not args.quiet)
         print(f"morphosim view: {args.env} with the {args.policy} policy at {viewer.url} (Ctrl-C to stop)",
               flush=True)
         viewer.serve_forever()
         return 0
 
+    if args.env_option:
+        raise ValueError("Expected --env-option only with --env, found it without")
     from .app import SceneViewer, import_viser
     from .session import ViewerSession
 
@@ -65,3 +76,15 @@ def _view(args: argparse.Namespace) -> int:
           f"{scene.duration:g} s) at {viewer.url} (Ctrl-C to stop)", flush=True)
     viewer.serve_forever()
     return 0
+
+
+def _env_options(items: list[str]) -> dict:
+    import yaml
+
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip().isidentifier():
+            raise ValueError(f"Expected --env-option KEY=VALUE, found {item!r}")
+        out[key.strip()] = yaml.safe_load(value)
+    return out

@@ -100,8 +100,12 @@ def test_cli_arguments_are_checked(capsys):
 
     assert main(["view"]) == 2
     assert "Expected a scene file" in capsys.readouterr().err
-    assert main(["view", "a red ball", "--env", "MorphoSim/Track-v0"]) == 2
-    assert "either" in capsys.readouterr().err
+    assert main(["view", "a red ball", "--env-option", "detail=1"]) == 2
+    assert "only with --env" in capsys.readouterr().err
+    assert main(["view", "--env", "MorphoSim/Nothing-v0"]) == 2
+    assert "registered env id" in capsys.readouterr().err
+    assert main(["view", "--env", "MorphoSim/Nothing-v0", "--env-option", "detail"]) == 2
+    assert "KEY=VALUE" in capsys.readouterr().err
     assert main(["view", "missing.msim"]) == 2
     assert "no file" in capsys.readouterr().err
 
