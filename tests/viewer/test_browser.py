@@ -175,3 +175,35 @@ def _dilate(mask, r=6):
     import cv2
 
     return cv2.dilate(mask.astype(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+
+
+def test_env_episode_in_the_page():
+    """`morphosim view --env MorphoSim/Track-v0`: the page shows our third-person frames from its own
+    camera while a random policy plays, with the observation, reward and success in the panel."""
+    import gymnasium as gym
+
+    from morphosim_gym.viewer.env_app import EnvViewer
+    from morphosim_gym.viewer.testing import find_chromium, headless_chromium, page_text, wait_for
+
+    if "MorphoSim/Track-v0" not in gym.registry:
+        pytest.skip("MorphoSim/Track-v0 is not registered in this build")
+    try:
+        find_chromium()
+    except BackendUnavailableError as exc:
+        pytest.skip(f"no headless browser here: {exc}")
+    with EnvViewer("MorphoSim/Track-v0", policy="random", port=0, verbose=False, long_side=320,
+                   steps_per_second=10) as viewer, headless_chromium(1280, 800) as driver:
+        driver.get(viewer.url)
+        wait_for(lambda: viewer.server.get_clients(), 30, message="the page to connect")
+        client = next(iter(viewer.server.get_clients().values()))
+        step0 = viewer.runner.record.step
+        wait_for(lambda: viewer.runner.record.step >= step0 + 5 or viewer.runner.record.episode > 1, 30,
+                 message="the policy to play")
+        text = wait_for(lambda: (t := page_text(driver)) and "reward:" in t and t, 20, message="the episode panel")
+        assert "Track-v0" in text and "success:" in text and "keep the" in text       # the instruction
+        assert "what the agent sees" in text
+        viewer._play.value = False                                 # hold still to compare the page with our frame
+        viewer.wait_idle()
+        frame = wait_for(lambda: viewer.frames.get(client.client_id), 20, message="a frame")
+        assert frame["camera"] is not None                          # rendered from the page's camera
+        _shown(driver, type("F", (), {"image": frame["image"]})())
