@@ -176,6 +176,12 @@ class SceneViewer:
         """The object list as shown: label -> visible."""
         return {box.label: box.value for box in self._object_boxes}
 
+    def set_time(self, t: float) -> float:
+        """Show time `t` (as the time slider does); returns the time set."""
+        t = self.session.set_time(t)
+        self._time.value = t
+        return t
+
     def run_command(self, text: str, client: Any = None) -> None:
         """Run a command as if typed into the page (by `client`, if given)."""
         self._run_command(text, client)
@@ -293,6 +299,7 @@ class SceneViewer:
             before = self.session.scene
             with self._pending_lock:
                 self._pending = {"text": text, "received": received, "before": before, "edit_ms": None}
+            self._latency.content = ""
             if text.strip():
                 self._status.content = f"Running: {md_escape(text.strip())} ..."
             entry = self.session.submit(text)
@@ -308,8 +315,7 @@ class SceneViewer:
                     for c in self.server.get_clients().values():
                         self._reset_camera(c)
                 self._refresh_panels()
-                if entry.kind != "undo":
-                    self._command.value = ""
+                self._command.value = ""
                 self._status.content = f"**Done**: {md_escape(entry.message)}"
             else:
                 self._history.content = self._history_text()
