@@ -7,6 +7,7 @@ import sys
 import time
 import urllib.request
 
+import numpy as np
 import pytest
 
 import morphosim_gym as ms
@@ -132,3 +133,42 @@ def test_cli_serves_a_scene_file(tmp_path, ball_scene):
     finally:
         proc.terminate()
         proc.wait(10)
+
+
+class _PageCamera:
+    """What viser's CameraHandle offers: the pose and field of view the page reported."""
+
+    def __init__(self, camera, aspect):
+        from morphosim_gym.viewer import viewer_pose
+
+        self.wxyz, self.position = viewer_pose(camera)
+        self.fov, self.aspect = np.radians(camera.fov_y_deg), aspect
+
+
+class _SilentCamera:
+    """A page that has not reported its camera yet (viser asserts on reads)."""
+
+    @property
+    def wxyz(self):
+        raise AssertionError
+
+
+def test_frames_are_rendered_from_the_page_camera(viewer):
+    from morphosim_gym.viewer import render_size
+
+    session = viewer.session
+    orbit = session.scene.camera.orbit(40.0, session.orbit_centre())
+    client = type("Client", (), {"camera": _PageCamera(orbit, 2.0)})()
+    cam = viewer.client_camera(client)
+    assert (cam.width, cam.height) == render_size(2.0, viewer.long_side)
+    np.testing.assert_allclose(cam.world_to_camera, orbit.world_to_camera, atol=1e-9)
+    assert cam.fov_y_deg == pytest.approx(orbit.fov_y_deg)
+    viewer._follow.value = True                  # "Scene camera": the scene's own camera at the time shown
+    assert viewer.set_time(1.0) == 1.0 and viewer._time.value == 1.0
+    np.testing.assert_allclose(viewer.client_camera(client).world_to_camera,
+                               session.scene.camera_at(1.0).world_to_camera)
+    viewer._follow.value = False
+    silent = type("Client", (), {"camera": _SilentCamera()})()
+    cam = viewer.client_camera(silent)            # until the page reports: the scene camera, 16:9
+    np.testing.assert_allclose(cam.world_to_camera, session.scene.camera.world_to_camera)
+    assert (cam.width, cam.height) == render_size(16 / 9, viewer.long_side)
