@@ -79,6 +79,7 @@ def _ball_mask(session, frame, size):
 def test_page_camera_is_the_scene_camera(browser_env):
     session, viewer, driver, client = browser_env
     gen = session.scene.camera
+    viewer._reset_camera(client)                 # (in case another test moved it)
     frame = _settled_frame(viewer, client, lambda f: np.allclose(f.camera.position, gen.position, atol=1e-3))
     # viser's camera, converted, is the generation camera (same pose, same vertical field of view)
     np.testing.assert_allclose(frame.camera.world_to_camera, gen.world_to_camera, atol=1e-3)
@@ -92,6 +93,7 @@ def test_typed_edit_changes_the_image_as_asked(browser_env, record_property):
 
     session, viewer, driver, client = browser_env
     gen = session.scene.camera
+    viewer._reset_camera(client)
     before = _settled_frame(viewer, client, lambda f: np.allclose(f.camera.position, gen.position, atol=1e-3))
     shot0, visible0 = _shown(driver, before)
     size = (shot0.shape[1], shot0.shape[0])
