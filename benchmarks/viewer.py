@@ -132,7 +132,8 @@ def _with_browser(viewer, args) -> list[dict]:
         time.sleep(1.0)
         driver.execute_script("""
             window.__mt = {};
-            document.addEventListener('keydown', e => { if (e.key === 'Enter') window.__mt.enter = performance.now(); }, true);
+            document.addEventListener('keydown', e => {
+                if (e.key === 'Enter') window.__mt.enter = performance.now(); }, true);
             new MutationObserver(() => {
                 if (window.__mt.expect && !window.__mt.frame && document.body.innerText.includes(window.__mt.expect))
                     window.__mt.frame = performance.now();

@@ -319,8 +319,8 @@ class SceneViewer:
                 self._status.content = f"**Done**: {md_escape(entry.message)}"
             else:
                 self._history.content = self._history_text()
-                self._status.content = (f"**Error**: could not apply '{md_escape(entry.text)}': {md_escape(entry.message)}"
-                                        f"  \nStill showing the last good scene.")
+                self._status.content = (f"**Error**: could not apply '{md_escape(entry.text)}': "
+                                        f"{md_escape(entry.message)}  \nStill showing the last good scene.")
                 if client is not None:
                     client.add_notification("Command failed", entry.message, color="red", auto_close_seconds=8.0)
 

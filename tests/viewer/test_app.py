@@ -14,7 +14,7 @@ import morphosim_gym as ms
 from morphosim_gym.errors import BackendUnavailableError
 from morphosim_gym.viewer import ViewerSession
 
-from .conftest import BALL, BUS
+from .conftest import BUS
 
 
 @pytest.fixture

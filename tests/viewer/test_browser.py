@@ -105,7 +105,8 @@ def test_typed_edit_changes_the_image_as_asked(browser_env, record_property):
     # time the round trip in the page: Enter pressed -> the latency line names the edit
     driver.execute_script("""
         window.__mt = {};
-        document.addEventListener('keydown', e => { if (e.key === 'Enter') window.__mt.enter = performance.now(); }, true);
+        document.addEventListener('keydown', e => {
+                if (e.key === 'Enter') window.__mt.enter = performance.now(); }, true);
         new MutationObserver(() => {
             if (!window.__mt.frame && document.body.innerText.includes("Frame of 'make the ball blue' sent"))
                 window.__mt.frame = performance.now();
