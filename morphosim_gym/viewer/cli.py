@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--reconstruction", choices=["oracle", "fit"], default="oracle",
                    help="how prompts become scenes: 'oracle' (the generator's ground truth, instant; default) "
                         "or 'fit' (reconstructed from the generated clip, minutes)")
-    p.add_argument("--detail", type=float, default=1.0, help="Gaussian budget multiplier of generated scenes")
+    p.add_argument("--detail", type=float, default=None,
+                   help="Gaussian budget multiplier of generated scenes (default 1; with --env, the env's default)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default: this machine only)")
     p.add_argument("--port", type=int, default=8080, help="port (the next free one if taken; 0: any)")
     p.add_argument("--resolution", type=int, default=512, help="longer side of streamed frames, pixels")
@@ -50,6 +51,10 @@ def _view(args: argparse.Namespace) -> int:
         kwargs = _env_options(args.env_option)
         if args.source is not None:
             kwargs["prompt"] = args.source
+        if args.detail is not None:
+            kwargs.setdefault("detail", args.detail)
+        if args.reconstruction != "oracle":
+            kwargs.setdefault("reconstruction", args.reconstruction)
         print(f"morphosim view: making {args.env} ...", flush=True)
         viewer = EnvViewer(args.env, policy=make_policy(args.policy, args.seed), seed=args.seed,
                            episodes=args.episodes, env_kwargs=kwargs, host=args.host, port=args.port,
@@ -65,7 +70,8 @@ def _view(args: argparse.Namespace) -> int:
     from .session import ViewerSession
 
     import_viser()                                  # fail before generating anything
-    sim = MorphoSim(reconstruction=args.reconstruction, generation=GenerationConfig(detail=args.detail))
+    detail = 1.0 if args.detail is None else args.detail
+    sim = MorphoSim(reconstruction=args.reconstruction, generation=GenerationConfig(detail=detail))
     print("morphosim view: preparing the scene ...", flush=True)
     session = ViewerSession.from_source(args.source, sim=sim, seed=args.seed)
     session.warm_up()
