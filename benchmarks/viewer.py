@@ -60,20 +60,25 @@ def main() -> int:
     page = [r["page_ms"] for r in rows if r.get("page_ms") is not None]
     render = [r["render_ms"] for r in rows]
     edit = [r["edit_ms"] for r in rows]
-    print(f"\n{'edit':32s} {'edit ms':>8s} {'render ms':>9s} {'server ms':>9s} {'page ms':>8s}")
+    print(f"\n{'edit':32s} {'edit ms':>8s} {'render ms':>9s} {'server ms':>9s} {'page ms':>8s} "
+          f"{'to server':>9s} {'to page':>8s}")
     for r in rows:
-        pm = f"{r['page_ms']:8.1f}" if r.get("page_ms") is not None else f"{'-':>8s}"
-        print(f"{r['text']:32s} {r['edit_ms']:8.1f} {r['render_ms']:9.1f} {r['server_ms']:9.1f} {pm}")
+        extra = [r.get(k) for k in ("page_ms", "page_to_server_ms", "server_to_page_ms")]
+        cols = " ".join(f"{v:8.1f}" if v is not None else f"{'-':>8s}" for v in extra)
+        print(f"{r['text']:32s} {r['edit_ms']:8.1f} {r['render_ms']:9.1f} {r['server_ms']:9.1f} {cols}")
 
     def stats(xs):
         return {"median": round(statistics.median(xs), 1), "p90": round(sorted(xs)[int(0.9 * (len(xs) - 1))], 1),
                 "max": round(max(xs), 1)} if xs else None
 
+    to_server = [r["page_to_server_ms"] for r in rows if "page_to_server_ms" in r]
+    to_page = [r["server_to_page_ms"] for r in rows if "server_to_page_ms" in r]
     summary = {"gaussians": n, "frame_size": rows[0]["size"] if rows else None, "edits": len(rows),
                "edit_ms": stats(edit), "render_ms": stats(render), "server_ms": stats(server), "page_ms": stats(page),
+               "page_to_server_ms": stats(to_server), "server_to_page_ms": stats(to_page),
                "load_average": os.getloadavg(), "cpus": os.cpu_count(), "rows": rows}
     print(f"\nmedian (p90, max) over {len(rows)} edits, {n} Gaussians, frames {summary['frame_size']}:")
-    for key in ("edit_ms", "render_ms", "server_ms", "page_ms"):
+    for key in ("edit_ms", "render_ms", "server_ms", "page_ms", "page_to_server_ms", "server_to_page_ms"):
         if summary[key]:
             s = summary[key]
             print(f"  {key:10s} {s['median']:7.1f}  ({s['p90']:.1f}, {s['max']:.1f})")
@@ -149,6 +154,11 @@ def _with_browser(viewer, args) -> list[dict]:
                              message="the page to receive the frame")
                 row = _row(viewer, text)
                 row["page_ms"] = t["frame"] - t["enter"]
+                # the page's clock to the server's (same machine): where the time outside the server goes
+                origin = driver.execute_script("return performance.timeOrigin;")
+                lat = viewer.latencies[-1]
+                row["page_to_server_ms"] = 1000.0 * lat["received_epoch"] - (origin + t["enter"])
+                row["server_to_page_ms"] = (origin + t["frame"]) - 1000.0 * lat["sent_epoch"]
                 rows.append(row)
                 time.sleep(0.2)
     return rows

@@ -295,10 +295,12 @@ class SceneViewer:
     def _run_command(self, text: str, client: Any = None) -> None:
         """Apply a typed command (on viser's callback thread pool, never the websocket loop)."""
         received = time.perf_counter()
+        received_epoch = time.time()
         with self._command_lock:
             before = self.session.scene
             with self._pending_lock:
-                self._pending = {"text": text, "received": received, "before": before, "edit_ms": None}
+                self._pending = {"text": text, "received": received, "received_epoch": received_epoch,
+                                 "before": before, "edit_ms": None}
             self._latency.content = ""
             if text.strip():
                 self._status.content = f"Running: {md_escape(text.strip())} ..."
@@ -392,7 +394,8 @@ class SceneViewer:
                   "total_ms": 1000.0 * (info.sent_at - p["received"]),
                   "render_ms": info.render_ms, "send_ms": info.send_ms,
                   "size": [int(info.image.shape[1]), int(info.image.shape[0])],
-                  "gaussians": len(snap.scene.gaussians)}
+                  "gaussians": len(snap.scene.gaussians), "received_epoch": p["received_epoch"],
+                  "sent_epoch": p["received_epoch"] + (info.sent_at - p["received"])}
         self.latencies.append(record)
         self._latency.content = (f"Frame of '{md_escape(p['text'])}' sent {record['total_ms']:.0f} ms after the "
                                  f"command arrived (render {info.render_ms:.0f} ms at {record['size'][0]}x"
