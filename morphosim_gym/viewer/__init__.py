@@ -13,13 +13,15 @@ from .worker import FrameWorker
 __all__ = [
     "ViewerSession", "LogEntry", "Snapshot", "format_log", "resize_keep_fov", "resolve_source",
     "camera_from_viewer", "viewer_pose", "viewer_view", "render_size",
-    "FrameWorker", "SceneViewer",
+    "FrameWorker", "SceneViewer", "EnvViewer", "EnvRunner", "make_policy",
 ]
+
+_LAZY = {"SceneViewer": "app", "EnvViewer": "env_app", "EnvRunner": "env_app", "make_policy": "env_app"}
 
 
 def __getattr__(name: str):
-    if name == "SceneViewer":           # imports viser: only when asked for
-        from .app import SceneViewer
+    if name in _LAZY:                   # the web app imports viser: only when asked for
+        import importlib
 
-        return SceneViewer
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
