@@ -220,7 +220,7 @@ class ViewerSession:
             return self._record(LogEntry(text, "error", False, message, time.perf_counter() - start))
         seconds = time.perf_counter() - start
         with self._lock:
-            if self._scene is not scene:      # another command won the race: apply ours on top of it
+            if self._scene is not scene:      # another command (or undo) changed the scene meanwhile
                 return self._record(LogEntry(text, "error", False,
                                              "The scene changed while this command ran; type it again"))
             if kind == "generate":
