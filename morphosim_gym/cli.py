@@ -20,6 +20,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "morphosim_gym.reconstruct.cli",
     "morphosim_gym.scene.cli",
     "morphosim_gym.language.cli",
+    "morphosim_gym.viewer.cli",
 )
 
 

@@ -1,0 +1,142 @@
+"""`morphosim view --env`: the episode runner and its page, on a small stand-in env (always) and on
+MorphoSim/Track-v0 (where the envs are installed)."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+import morphosim_gym  # noqa: F401  (registers the envs, where present)
+from morphosim_gym.viewer.env_app import EnvRunner, EnvViewer, make_policy
+
+HAVE_TRACK = "MorphoSim/Track-v0" in gym.registry
+
+
+class CountingEnv(gym.Env):
+    """Five steps; reward 1 - mean |action|; success from the third step; the image shows the step."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+
+    def __init__(self, render_mode="rgb_array"):
+        self.observation_space = spaces.Dict({"rgb": spaces.Box(0, 255, (16, 16, 3), np.uint8)})
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.render_mode = render_mode
+        self.n = 0
+
+    def _obs(self):
+        return {"rgb": np.full((16, 16, 3), 40 * self.n, np.uint8)}
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.n = 0
+        return self._obs(), {"success": False, "seed": seed}
+
+    def step(self, action):
+        self.n += 1
+        reward = 1.0 - float(np.abs(action).mean())
+        return self._obs(), reward, self.n >= 5, False, {"success": self.n >= 3, "reward_main": reward}
+
+    def render(self):
+        return np.full((24, 32, 3), 40 * self.n, np.uint8)
+
+
+def forward_policy(obs, action_space):
+    """A policy importable as 'tests.viewer.test_env_viewer:forward_policy'."""
+    return np.array([0.5, 0.0], dtype=np.float32)
+
+
+def test_episodes_run_with_a_policy_and_restart():
+    runner = EnvRunner(CountingEnv(), policy="zero", seed=7)
+    rec = runner.record
+    assert (rec.episode, rec.step, rec.info["seed"]) == (1, 0, 7)
+    for _ in range(5):
+        rec = runner.step()
+    assert rec.terminated and rec.done and rec.step == 5 and rec.success
+    assert rec.episode_return == pytest.approx(5.0) and runner.rewards == [1.0] * 5
+    rec = runner.step()                                     # a finished episode is followed by a reset
+    assert (rec.episode, rec.step, rec.info["seed"]) == (2, 0, 8)
+    assert runner.observation_image.shape == (16, 16, 3)
+    assert not runner.has_world
+    ok, msg = runner.perturb("make the ball blue")
+    assert not ok and "does not take language edits" in msg
+
+
+def test_random_policy_is_seeded():
+    def actions(seed):
+        runner = EnvRunner(CountingEnv(), policy="random", seed=seed)
+        return [runner.policy(None, runner.env.action_space) for _ in range(4)]
+
+    np.testing.assert_array_equal(actions(3), actions(3))
+    assert not np.array_equal(actions(3), actions(4))
+
+
+def test_policies_by_name():
+    space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+    assert np.all(make_policy("zero")(None, space) == 0)
+    assert space.contains(make_policy("random")(None, space))
+    fn = make_policy("tests.viewer.test_env_viewer:forward_policy")
+    assert fn is forward_policy
+    for bad in ("", "best", "tests.viewer.test_env_viewer:nothing", "no_such_module:f"):
+        with pytest.raises(ValueError, match="policy"):
+            make_policy(bad)
+
+
+def test_unknown_env_id_lists_the_known_ones():
+    with pytest.raises(ValueError, match="registered env id"):
+        EnvRunner("MorphoSim/Nothing-v0")
+
+
+def test_viewer_panel_and_playback_on_a_plain_env():
+    from morphosim_gym.viewer.testing import wait_for
+
+    with EnvViewer(CountingEnv(), policy="tests.viewer.test_env_viewer:forward_policy", episodes=2, port=0,
+                   verbose=False, steps_per_second=30, autoplay=True) as viewer:
+        wait_for(lambda: not viewer._play.value, 10, message="playback to stop after 2 episodes")
+        rec = viewer.runner.record
+        assert rec.episode == 2 and rec.done
+        text = viewer.panel_text
+        assert "Episode 2" in text and "success: yes" in text and "return: 3.750" in text
+        assert "reward\\_main 0.750" in text
+        viewer._buttons.value = "New episode"               # the buttons work without a page too
+        assert viewer.runner.record.episode == 3
+
+
+# ----------------------------------------------------------------------------- MorphoSim/Track-v0
+@pytest.fixture(scope="module")
+def track_runner():
+    if not HAVE_TRACK:
+        pytest.skip("MorphoSim/Track-v0 is not registered in this build")
+    runner = EnvRunner("MorphoSim/Track-v0", policy="random", seed=0)
+    yield runner
+    runner.close()
+
+
+def test_track_third_person_view_shows_world_and_agent(track_runner):
+    import morphosim_gym as ms
+
+    runner = track_runner
+    rec = runner.step()
+    assert runner.has_world and runner.observation_image.shape == runner.env.observation_space["rgb"].shape
+    g, bg = runner.world_gaussians()
+    world = runner.env.unwrapped.world
+    assert len(g) > len(world.gaussians())                 # the agent's own Gaussians are in the view
+    cam = runner.default_camera(96, 64)
+    out = ms.render(g, cam, background=bg)
+    target = rec.info["target_id"]
+    assert (out.instance == target).sum() > 5               # the target is in the third-person view
+    assert (~np.isin(out.instance, [-1] + [o.id for o in world.scene.objects])).sum() > 5   # and the agent
+    # the agent's camera from info is the camera the observation was rendered from
+    eye = next(iter(runner.agent_cameras().values()))
+    obs = ms.render(world.gaussians(), eye, background=bg).rgb_uint8()
+    assert np.abs(obs.astype(int) - runner.observation_image.astype(int)).mean() < 3
+
+
+def test_track_language_edit_during_an_episode(track_runner):
+    runner = track_runner
+    target = runner.record.info["target"]
+    before = runner.env.unwrapped.scene.content_hash()
+    ok, msg = runner.perturb(f"make the {target} blue")
+    assert ok, msg
+    assert runner.env.unwrapped.scene.content_hash() != before
+    ok, msg = runner.perturb("delete the giraffe")
+    assert not ok and "giraffe" in msg
