@@ -146,3 +146,20 @@ def test_gradients_bit_identical_across_runs_and_thread_counts():
         numba.set_num_threads(n)
     for k in g1:
         assert torch.equal(g1[k], g2[k]) and torch.equal(g1[k], g3[k]), k
+
+
+def test_public_render_with_torch_gaussians_is_differentiable():
+    from morphosim_gym.render import render
+    from morphosim_gym.scene import Gaussians
+
+    s = random_scene(9, 300, d=3)
+    ps = {k: torch.tensor(s[k], requires_grad=True) for k in PARAMS}
+    g = Gaussians(**ps, object_ids=torch.as_tensor(s["object_ids"]))
+    cam = cameras(24, 20, 1)[0]
+    out = render(g, cam, backend="cpu", features=True)
+    ref = render(g, cam, backend="torch", features=True)
+    assert out.rgb.shape == (20, 24, 3) and out.features.shape == (20, 24, 3)
+    torch.testing.assert_close(out.rgb, ref.rgb, atol=1e-5, rtol=0)
+    (out.rgb.sum() + out.depth.sum() + out.alpha.sum() + out.features.sum()).backward()
+    for k, p in ps.items():
+        assert p.grad is not None and torch.isfinite(p.grad).all() and p.grad.abs().sum() > 0, k

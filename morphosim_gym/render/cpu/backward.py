@@ -56,7 +56,9 @@ _S_Q = 1536
 _S_LAST = 1792  # list position where the pixel stopped, as a float
 _S_W = 2048     # weight of the current Gaussian (feature channels)
 _S_GF = 2304    # g_feat . f of the current Gaussian
-_S_SIZE = 2560
+_S_PX = 2560    # pixel centre x, y of each pixel of the tile
+_S_PY = 2816
+_S_SIZE = 3072
 
 
 @_jit_r
@@ -100,6 +102,8 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
     uL = np.uint64(_S_LAST)
     uW = np.uint64(_S_W)
     uGF = np.uint64(_S_GF)
+    uPX = np.uint64(_S_PX)
+    uPY = np.uint64(_S_PY)
     ntiles = order.shape[0]
     while True:
         q = atomic_add(claim, 0, 1)
@@ -116,6 +120,8 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
         kend = 0
         for p in range(256):
             lastp[p] = 0
+            S[_S_PX + p] = F(x0 + (p & 15)) + half
+            S[_S_PY + p] = F(y0 + (p >> 4)) + half
         for ly in range(ny):
             for lx in range(nx):
                 p = (ly << 4) + lx
@@ -155,8 +161,6 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
                 rowbits[p >> 4] |= 1 << (p & 15)
             else:
                 nev += 1
-        x0f = F(x0) + half
-        y0f = F(y0) + half
         for k in range(kend):
             while nev < 256 and lastp[pix_order[nev]] <= k:
                 p = pix_order[nev]
@@ -212,9 +216,8 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
             g_b = zero
             for pp in range(pa, pb):
                 p = np.uint64(pp)
-                pi = np.int32(pp)
-                dx = mx - (x0f + F(pi & np.int32(15)))
-                dy = my - (y0f + F(pi >> np.int32(4)))
+                dx = mx - S[uPX + p]
+                dy = my - S[uPY + p]
                 power = F(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy
                 e = splat_exp(power)
                 aw = op * e

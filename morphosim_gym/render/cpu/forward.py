@@ -39,7 +39,9 @@ _S_WMAX = 1280  # largest weight so far
 _S_KBEST = 1536  # list position of that weight (as a float)
 _S_LAST = 1792  # list position where the pixel stopped (as a float), -1 while compositing
 _S_W = 2048     # weight of the current Gaussian (for the feature channels)
-_S_SIZE = 2304
+_S_PX = 2304    # pixel centre x, y of each pixel of the tile (constant per tile)
+_S_PY = 2560
+_S_SIZE = 2816
 # Positions are stored as floats (exact below 2^24 in float32: `render_camera` checks the
 # longest tile list) and every select falls back to `old + 0`, not to `old` itself: a select
 # between a new value and the value just loaded from the same address is lowered to a masked
@@ -88,6 +90,8 @@ def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
     uKB = np.uint64(_S_KBEST)
     uL = np.uint64(_S_LAST)
     uW = np.uint64(_S_W)
+    uPX = np.uint64(_S_PX)
+    uPY = np.uint64(_S_PY)
     ntiles = order.shape[0]
     while True:
         # claim the next tile: threads that finish early (or run undisturbed) take more tiles
@@ -109,12 +113,12 @@ def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
             rowbits[ly] = full_row if ly < ny else 0
         S[:] = zero
         for p in range(256):
+            S[_S_PX + p] = F(x0 + (p & 15)) + half
+            S[_S_PY + p] = F(y0 + (p >> 4)) + half
             S[_S_T + p] = one
             S[_S_LAST + p] = -one if ((p & 15) < nx and (p >> 4) < ny) else zero  # outside the image: stopped
         if D > 0:
             facc[:] = zero
-        x0f = F(x0) + half
-        y0f = F(y0) + half
         for k in range(L):
             if nactive_rows == 0:
                 break
@@ -148,9 +152,8 @@ def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
             # alpha < 1/255 and change nothing
             for pp in range(ly0 << 4, (ly1 + 1) << 4):
                 p = np.uint64(pp)
-                pi = np.int32(pp)
-                dx = mx - (x0f + F(pi & np.int32(15)))
-                dy = my - (y0f + F(pi >> np.int32(4)))
+                dx = mx - S[uPX + p]
+                dy = my - S[uPY + p]
                 power = ca * dx * dx + cc * dy * dy - cb * dx * dy
                 al = min(amax, op * splat_exp(power))
                 Tp = S[uT + p]

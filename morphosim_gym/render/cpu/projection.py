@@ -283,25 +283,22 @@ def project_forward(means,      # [N, 3]
                        K, width, height, near, rec, trect, tiles_x, counts[t])
 
 
+# Fields of the backward projection's block scratch (inputs, then outputs; see _project_soa).
+(_B_M0, _B_M1, _B_M2, _B_QW, _B_QX, _B_QY, _B_QZ, _B_S0, _B_S1, _B_S2,
+ _B_GMX, _B_GMY, _B_GIA, _B_GIB, _B_GIC, _B_GZ, _B_OK,
+ _B_GM0, _B_GM1, _B_GM2, _B_GQW, _B_GQX, _B_GQY, _B_GQZ, _B_GS0, _B_GS1, _B_GS2) = range(27)
+_B_NFIELD = 27
+
+
 @jit
-def _project_backward_range(lo, hi,
-                            means,      # [N, 3]
-                            quats,      # [N, 4]
-                            scales,     # [N, 3]
-                            viewmat,    # [4, 4]
-                            K,          # [3, 3]
-                            width, height,
-                            rec,        # [N, 16] forward records (culled ones have X1 < X0)
-                            grad2d,     # [N, 10] 2D gradients (columns backward.G_*)
-                            gfeat2d,    # [N, D]
-                            g_means,    # [N, 3] out (+=)
-                            g_quats,    # [N, 4] out (+=)
-                            g_scales,   # [N, 3] out (+=)
-                            g_opac,     # [N] out (+=)
-                            g_colors,   # [N, 3] out (+=)
-                            g_feat):    # [N, D] out (+=)
-    F = rec.dtype.type
-    D = gfeat2d.shape[1]
+def _project_backward_soa(n,
+                          buf,       # [_B_NFIELD * _BLOCK] block scratch
+                          viewmat,   # [4, 4]
+                          K,         # [3, 3]
+                          width, height):
+    """Branch-free chain rule for n <= _BLOCK Gaussians held field by field in `buf`
+    (culled ones, _B_OK = 0, get zeros)."""
+    F = buf.dtype.type
     fx = K[0, 0]
     fy = K[1, 1]
     r00, r01, r02, t0 = viewmat[0, 0], viewmat[0, 1], viewmat[0, 2], viewmat[0, 3]
@@ -322,41 +319,36 @@ def _project_backward_range(lo, hi,
     zero = F(0.0)
     two = F(2.0)
     blur = F(BLUR)
-    for i in range(lo, hi):
-        if rec[i, R_X1] < rec[i, R_X0]:
-            continue   # culled: never rasterised, no gradient
-        gmx = grad2d[i, 0]
-        gmy = grad2d[i, 1]
-        gia = grad2d[i, 2]
-        gib = grad2d[i, 3]
-        gic = grad2d[i, 4]
-        g_opac[i] += grad2d[i, 5]
-        gz = grad2d[i, 6]
-        g_colors[i, 0] += grad2d[i, 7]
-        g_colors[i, 1] += grad2d[i, 8]
-        g_colors[i, 2] += grad2d[i, 9]
-        for d in range(D):
-            g_feat[i, d] += gfeat2d[i, d]
+    B = np.uint64(_BLOCK)
+    for jj in range(n):
+        j = np.uint64(jj)
+        ok = buf[np.uint64(_B_OK) * B + j] > zero
+        gmx = buf[np.uint64(_B_GMX) * B + j]
+        gmy = buf[np.uint64(_B_GMY) * B + j]
+        gia = buf[np.uint64(_B_GIA) * B + j]
+        gib = buf[np.uint64(_B_GIB) * B + j]
+        gic = buf[np.uint64(_B_GIC) * B + j]
+        gz = buf[np.uint64(_B_GZ) * B + j]
         # ---- recompute the forward quantities (same formulas as _project_soa)
-        m0 = means[i, 0]
-        m1 = means[i, 1]
-        m2 = means[i, 2]
+        m0 = buf[np.uint64(_B_M0) * B + j]
+        m1 = buf[np.uint64(_B_M1) * B + j]
+        m2 = buf[np.uint64(_B_M2) * B + j]
         x = r00 * m0 + r01 * m1 + r02 * m2 + t0
         y = r10 * m0 + r11 * m1 + r12 * m2 + t1
         z = r20 * m0 + r21 * m1 + r22 * m2 + t2
-        qw0 = quats[i, 0]
-        qx0 = quats[i, 1]
-        qy0 = quats[i, 2]
-        qz0 = quats[i, 3]
+        qw0 = buf[np.uint64(_B_QW) * B + j]
+        qx0 = buf[np.uint64(_B_QX) * B + j]
+        qy0 = buf[np.uint64(_B_QY) * B + j]
+        qz0 = buf[np.uint64(_B_QZ) * B + j]
         qnorm = np.sqrt(qw0 * qw0 + qx0 * qx0 + qy0 * qy0 + qz0 * qz0)
         qn = one / qnorm
         qw = qw0 * qn
         qx = qx0 * qn
         qy = qy0 * qn
         qz = qz0 * qn
-        s0 = scales[i, 0]
-        s1 = scales[i, 1]
-        s2 = scales[i, 2]
+        s0 = buf[np.uint64(_B_S0) * B + j]
+        s1 = buf[np.uint64(_B_S1) * B + j]
+        s2 = buf[np.uint64(_B_S2) * B + j]
         R00 = one - two * (qy * qy + qz * qz)
         R01 = two * (qx * qy - qw * qz)
         R02 = two * (qx * qz + qw * qy)
@@ -378,13 +370,13 @@ def _project_backward_range(lo, hi,
         w20 = r20 * m00 + r21 * m10 + r22 * m20
         w21 = r20 * m01 + r21 * m11 + r22 * m21
         w22 = r20 * m02 + r21 * m12 + r22 * m22
-        iz = one / z
+        iz = one / (z if ok else one)
         xu = x * iz
         yv = y * iz
         u = min(max(xu, -lim_x_neg), lim_x_pos)
         v = min(max(yv, -lim_y_neg), lim_y_pos)
-        ind_u = one if (xu >= -lim_x_neg) and (xu <= lim_x_pos) else zero
-        ind_v = one if (yv >= -lim_y_neg) and (yv <= lim_y_pos) else zero
+        ind_u = one if (xu >= -lim_x_neg) & (xu <= lim_x_pos) else zero
+        ind_v = one if (yv >= -lim_y_neg) & (yv <= lim_y_pos) else zero
         j00 = fx * iz
         j02 = -fx * u * iz
         j11 = fy * iz
@@ -400,7 +392,7 @@ def _project_backward_range(lo, hi,
         cc = b0 * b0 + b1 * b1 + b2 * b2 + blur
         det = ca * cc - cb * cb
         # ---- conic (cc, -cb, ca) / det  ->  2D covariance entries
-        idet2 = one / (det * det)
+        idet2 = one / (det * det if ok else one)
         g_ca = (-cc * cc * gia + cb * cc * gib - cb * cb * gic) * idet2
         g_cb = (two * cb * cc * gia - (det + two * cb * cb) * gib + two * ca * cb * gic) * idet2
         g_cc = (-cb * cb * gia + ca * cb * gib - ca * ca * gic) * idet2
@@ -430,9 +422,9 @@ def _project_backward_range(lo, hi,
                + gj12 * fy * (ind_v * y * iz2 * iz + v * iz2)
                - (gmx * fx * x + gmy * fy * y) * iz2)
         # p = R_cam m + t
-        g_means[i, 0] += r00 * gx + r10 * gy + r20 * gzc
-        g_means[i, 1] += r01 * gx + r11 * gy + r21 * gzc
-        g_means[i, 2] += r02 * gx + r12 * gy + r22 * gzc
+        buf[np.uint64(_B_GM0) * B + j] = r00 * gx + r10 * gy + r20 * gzc if ok else zero
+        buf[np.uint64(_B_GM1) * B + j] = r01 * gx + r11 * gy + r21 * gzc if ok else zero
+        buf[np.uint64(_B_GM2) * B + j] = r02 * gx + r12 * gy + r22 * gzc if ok else zero
         # ---- W = R_cam M  ->  M = R diag(s)
         gm00 = r00 * gw00 + r10 * gw10 + r20 * gw20
         gm01 = r00 * gw01 + r10 * gw11 + r20 * gw21
@@ -443,9 +435,9 @@ def _project_backward_range(lo, hi,
         gm20 = r02 * gw00 + r12 * gw10 + r22 * gw20
         gm21 = r02 * gw01 + r12 * gw11 + r22 * gw21
         gm22 = r02 * gw02 + r12 * gw12 + r22 * gw22
-        g_scales[i, 0] += gm00 * R00 + gm10 * R10 + gm20 * R20
-        g_scales[i, 1] += gm01 * R01 + gm11 * R11 + gm21 * R21
-        g_scales[i, 2] += gm02 * R02 + gm12 * R12 + gm22 * R22
+        buf[np.uint64(_B_GS0) * B + j] = gm00 * R00 + gm10 * R10 + gm20 * R20 if ok else zero
+        buf[np.uint64(_B_GS1) * B + j] = gm01 * R01 + gm11 * R11 + gm21 * R21 if ok else zero
+        buf[np.uint64(_B_GS2) * B + j] = gm02 * R02 + gm12 * R12 + gm22 * R22 if ok else zero
         g00, g01, g02 = gm00 * s0, gm01 * s1, gm02 * s2
         g10, g11, g12 = gm10 * s0, gm11 * s1, gm12 * s2
         g20, g21, g22 = gm20 * s0, gm21 * s1, gm22 * s2
@@ -458,10 +450,76 @@ def _project_backward_range(lo, hi,
         gqz = two * (-two * qz * g00 - qw * g01 + qx * g02 + qw * g10 - two * qz * g11 + qy * g12 + qx * g20
                      + qy * g21)
         dot = qw * gqw + qx * gqx + qy * gqy + qz * gqz
-        g_quats[i, 0] += (gqw - qw * dot) * qn
-        g_quats[i, 1] += (gqx - qx * dot) * qn
-        g_quats[i, 2] += (gqy - qy * dot) * qn
-        g_quats[i, 3] += (gqz - qz * dot) * qn
+        buf[np.uint64(_B_GQW) * B + j] = (gqw - qw * dot) * qn if ok else zero
+        buf[np.uint64(_B_GQX) * B + j] = (gqx - qx * dot) * qn if ok else zero
+        buf[np.uint64(_B_GQY) * B + j] = (gqy - qy * dot) * qn if ok else zero
+        buf[np.uint64(_B_GQZ) * B + j] = (gqz - qz * dot) * qn if ok else zero
+
+
+
+
+@jit
+def _project_backward_range(lo, hi,
+                            means,      # [N, 3]
+                            quats,      # [N, 4]
+                            scales,     # [N, 3]
+                            viewmat,    # [4, 4]
+                            K,          # [3, 3]
+                            width, height,
+                            rec,        # [N, 16] forward records (culled ones have X1 < X0)
+                            grad2d,     # [N, 10] 2D gradients (columns backward.G_*)
+                            gfeat2d,    # [N, D]
+                            g_means,    # [N, 3] out (+=)
+                            g_quats,    # [N, 4] out (+=)
+                            g_scales,   # [N, 3] out (+=)
+                            g_opac,     # [N] out (+=)
+                            g_colors,   # [N, 3] out (+=)
+                            g_feat):    # [N, D] out (+=)
+    D = gfeat2d.shape[1]
+    B = _BLOCK
+    buf = np.zeros(_B_NFIELD * _BLOCK, rec.dtype)
+    for b in range(lo, hi, _BLOCK):
+        n = min(b + _BLOCK, hi) - b
+        for j in range(n):
+            i = b + j
+            ok = rec[i, R_X1] >= rec[i, R_X0]   # culled: never rasterised, no gradient
+            buf[_B_OK * B + j] = 1.0 if ok else 0.0
+            buf[_B_M0 * B + j] = means[i, 0]
+            buf[_B_M1 * B + j] = means[i, 1]
+            buf[_B_M2 * B + j] = means[i, 2]
+            buf[_B_QW * B + j] = quats[i, 0]
+            buf[_B_QX * B + j] = quats[i, 1]
+            buf[_B_QY * B + j] = quats[i, 2]
+            buf[_B_QZ * B + j] = quats[i, 3]
+            buf[_B_S0 * B + j] = scales[i, 0]
+            buf[_B_S1 * B + j] = scales[i, 1]
+            buf[_B_S2 * B + j] = scales[i, 2]
+            buf[_B_GMX * B + j] = grad2d[i, 0]
+            buf[_B_GMY * B + j] = grad2d[i, 1]
+            buf[_B_GIA * B + j] = grad2d[i, 2]
+            buf[_B_GIB * B + j] = grad2d[i, 3]
+            buf[_B_GIC * B + j] = grad2d[i, 4]
+            buf[_B_GZ * B + j] = grad2d[i, 6]
+            if ok:
+                g_opac[i] += grad2d[i, 5]
+                g_colors[i, 0] += grad2d[i, 7]
+                g_colors[i, 1] += grad2d[i, 8]
+                g_colors[i, 2] += grad2d[i, 9]
+                for d in range(D):
+                    g_feat[i, d] += gfeat2d[i, d]
+        _project_backward_soa(n, buf, viewmat, K, width, height)
+        for j in range(n):
+            i = b + j
+            g_means[i, 0] += buf[_B_GM0 * B + j]
+            g_means[i, 1] += buf[_B_GM1 * B + j]
+            g_means[i, 2] += buf[_B_GM2 * B + j]
+            g_quats[i, 0] += buf[_B_GQW * B + j]
+            g_quats[i, 1] += buf[_B_GQX * B + j]
+            g_quats[i, 2] += buf[_B_GQY * B + j]
+            g_quats[i, 3] += buf[_B_GQZ * B + j]
+            g_scales[i, 0] += buf[_B_GS0 * B + j]
+            g_scales[i, 1] += buf[_B_GS1 * B + j]
+            g_scales[i, 2] += buf[_B_GS2 * B + j]
 
 
 @pjit
