@@ -57,10 +57,8 @@ def _check_int(value: Any, name: str, low: int = 0) -> int:
 class SceneSource:
     """Scenes by (prompt, seed) through a `MorphoSim`, with an in-memory LRU cache.
 
-    With `reconstruction="oracle"` and no disk cache, a scene is composed directly by the
-    procedural generator (the ground truth the clip would be rendered from), skipping the
-    49 clip frames that the oracle path discards; the result is the same scene
-    (same content hash) as `sim.generate(prompt, seed)`.
+    With `reconstruction="oracle"` (the envs' default) `MorphoSim.generate` composes the ground
+    truth directly, without rendering the clip frames that path discards.
     """
 
     def __init__(self, sim: Any, cache_size: int = 32) -> None:
@@ -81,18 +79,7 @@ class SceneSource:
         return scene
 
     def _generate(self, prompt: str, seed: int) -> Scene4D:
-        sim = self.sim
-        config = getattr(sim, "config", None)
-        gen = getattr(sim, "_generator", None)
-        if (config is not None and config.reconstruction == "oracle" and not config.cache
-                and hasattr(gen, "compose")):
-            plan = sim.parse(prompt)
-            if plan.mode != "generate":
-                raise CommandError(f"Expected a prompt that describes a scene to generate, found an edit command "
-                                   f"({prompt!r})")
-            if not plan.then:
-                return gen.compose(plan, seed, prompt).scene
-        return sim.generate(prompt, seed=seed)
+        return self.sim.generate(prompt, seed=seed)
 
 
 class MorphoSimEnv(gym.Env):

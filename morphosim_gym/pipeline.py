@@ -130,10 +130,20 @@ class MorphoSim:
 
     def generate(self, prompt: str, seed: int = 0) -> Scene4D:
         """Generate and reconstruct: a sentence to an editable Scene4D. Follow-up edits of a
-        compound command ("...; then make the cube blue") are applied in order."""
+        compound command ("...; then make the cube blue") are applied in order. With
+        `reconstruction="oracle"` the generator's ground truth is composed directly (the same
+        scene as `generate_clip(...).ground_truth`, without rendering the clip's frames)."""
         plan = self.parse(prompt)
-        clip = self.generate_clip(prompt, seed)
-        scene = self.reconstruct(clip)
+        if self.config.reconstruction == "oracle" and not self.config.cache:
+            # the ground truth is all the oracle path keeps: compose it without rendering the clip
+            if plan.mode != "generate":
+                raise CommandError(f"Expected a command that describes a scene to generate, found an edit command "
+                                   f"({prompt!r}); use sim.edit(scene, text) for edits")
+            if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+                raise ValueError(f"Expected seed as a non-negative integer, found {seed!r}")
+            scene = self._generator.compose(plan, seed, prompt).scene
+        else:
+            scene = self.reconstruct(self.generate_clip(prompt, seed))
         for follow in plan.then:
             scene = self.edit(scene, follow.text)
         return scene
