@@ -18,17 +18,7 @@ import numpy as np
 import morphosim_gym as ms
 from morphosim_gym.edit import scene_centre
 from morphosim_gym.generate.cli import write_video
-
-# (prompt, edit) pairs from the captions of the paper's figures
-PAPER = [
-    ("The fish swims through the crystal-clear waters from right to left", "Make the color of the fish and seaweed black."),
-    ("The bus is moving from right to left", "Make the bus yellow."),
-    ("A serene boat glides gracefully through tranquil waters from left to right", "Extract the boat."),
-    ("A car is moving from right to left through a serene sunlit landscape", "Extract the car."),
-    ("A small, vibrant red rubber ball is bouncing from right to left", "Delete the ball."),
-    ("A sleek black motorcycle is gliding effortlessly from right to left", "Delete the motorcycle."),
-    ("a red cube moves to the plate while the camera circles the table", "make the cube blue and reverse its motion"),
-]
+from morphosim_gym.generate.examples import PAPER_SCENES
 
 
 def main() -> None:
@@ -40,7 +30,7 @@ def main() -> None:
     out = Path(args.out)
     sim = ms.MorphoSim(generation=ms.GenerationConfig(width=args.size, height=args.size),
                        reconstruction="fit" if args.reconstruct else "oracle")
-    for k, (prompt, edit) in enumerate(PAPER):
+    for k, (prompt, edit) in enumerate(PAPER_SCENES):
         start = time.perf_counter()
         clip = sim.generate_clip(prompt, seed=0)
         scene = sim.reconstruct(clip)

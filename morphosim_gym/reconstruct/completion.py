@@ -1,13 +1,17 @@
 """Complete what a monocular clip never shows, so novel views are plausible rather than empty.
 
 Two documented priors (heuristics, not learned):
-* ground: a plane is fitted (RANSAC) to the static Gaussians that face up; grid cells of the
-  plane around the observed ground that hold no Gaussian get one, coloured like the nearest
-  observed cell (the ground continues beyond and behind what the camera saw);
+* ground: a plane is fitted (RANSAC) to the static Gaussians that face up; the empty plane
+  around the observed ground is tiled with flat Gaussians in rings of growing size (fine next to
+  what was seen, coarse far away), each coloured like the nearest observed cell (the ground
+  continues beyond and behind what the camera saw);
 * symmetry: each object's visible side is mirrored across the vertical plane through its
   centre that faces the camera it was seen from, wherever that leaves empty space (objects
   are assumed left/right symmetric in depth: their far side looks like their near side).
-Added Gaussians keep the instance id of what they complete and are skinned like it.
+Added Gaussians keep the instance id of what they complete and are skinned like it. Mirrored
+Gaussians that an input view shows are dropped (`visible_weights`, measured with the renderer);
+ground cells also fill gaps that the input views see, so the pipeline fits a few more
+iterations after completion.
 """
 
 from __future__ import annotations
@@ -16,10 +20,11 @@ import cv2
 import numpy as np
 import torch
 
+from ..render import rasterize
 from ..scene import GeneratedClip
 from .model import DynamicGaussians, inverse_sigmoid, quat_to_rotmat
 
-__all__ = ["complete", "fit_ground_plane"]
+__all__ = ["complete", "fit_ground_plane", "visible_weights"]
 
 
 def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 200,
@@ -49,11 +54,82 @@ def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 
     if inl.sum() >= 3:               # least-squares refinement on the inliers
         q = points[inl]
         c = q.mean(0)
-        _, _, vt = np.linalg.svd(q - c)
+        _, _, vt = np.linalg.svd(q - c, full_matrices=False)
         n = vt[-1] if vt[-1][2] > 0 else -vt[-1]
         d = float(n @ c)
         inl = np.abs(points @ n - d) < tol
     return n, d, inl
+
+
+def visible_weights(model: DynamicGaussians, clip: GeneratedClip, first: int, floor: float = 0.01,
+                    frame_stride: int = 4) -> np.ndarray:
+    """[N - first] how much each Gaussian from index `first` on shows in the input views (every
+    `frame_stride`-th frame and the last): its blending weight summed over the pixels where those
+    Gaussians together contribute more than `floor` of the colour (largest over the frames).
+
+    Measured with the renderer itself: the new Gaussians carry a feature of 1 (the others 0),
+    so a pixel's rendered feature is their joint weight there, and the gradient of
+    sum(relu(feature - floor)) with respect to a Gaussian's feature is its weight over the
+    pixels above the floor. Contributions below the floor (behind a nearly opaque surface)
+    change the image by less than the floor and are ignored."""
+    best = torch.zeros(model.num - first)
+    frames = sorted(set(range(0, clip.num_frames, max(1, frame_stride))) | {clip.num_frames - 1})
+    with torch.no_grad():
+        scales, opacities, colors = model.scales(), model.opacities(), model.colors()
+    for t in frames:
+        cam = clip.cameras[t]
+        probe = torch.zeros(model.num, 1)
+        probe[first:] = 1.0
+        probe.requires_grad_(True)
+        with torch.no_grad():
+            means, quats = model.warp(t)
+        out = rasterize(means, quats, scales, opacities, colors,
+                        torch.tensor(cam.world_to_camera[None], dtype=torch.float32),
+                        torch.tensor(cam.K[None], dtype=torch.float32), cam.width, cam.height, features=probe,
+                        nears=torch.tensor([cam.near], dtype=torch.float64))
+        torch.relu(out["features"] - floor).sum().backward()
+        best = torch.maximum(best, probe.grad[first:, 0].abs())
+    return best.numpy()
+
+
+def _drop_seen(model: DynamicGaussians, clip: GeneratedClip, first: int, threshold: float = 0.05,
+               rounds: int = 3) -> int:
+    """Remove the Gaussians from index `first` on that the input views show (`visible_weights`
+    above `threshold` pixels), so that completion leaves the input views as fitted; repeated
+    because removing one can uncover another. Returns how many are left."""
+    for _ in range(rounds):
+        if model.num == first:
+            break
+        seen = visible_weights(model, clip, first) > threshold
+        if not seen.any():
+            break
+        keep = np.ones(model.num, bool)
+        keep[first:] = ~seen
+        _subset(model, keep)
+    return model.num - first
+
+
+def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int, sigmas: float = 3.0) -> np.ndarray:
+    """[N - first] Gaussians from index `first` on whose camera depth in some input frame is below
+    `sigmas` times their largest scale (including behind the camera)."""
+    near = np.zeros(model.num - first, bool)
+    with torch.no_grad():
+        reach = sigmas * model.scales()[first:].max(dim=1).values.numpy()
+        for t in range(clip.num_frames):
+            means, _ = model.warp(t)
+            cam = clip.cameras[t]
+            z = means[first:].numpy().astype(np.float64) @ cam.world_to_camera[2, :3] + cam.world_to_camera[2, 3]
+            near |= z < reach
+    return near
+
+
+def _subset(model: DynamicGaussians, keep: np.ndarray) -> None:
+    k = torch.as_tensor(keep)
+    with torch.no_grad():
+        for name in ("means", "quats", "log_scales", "opacity_logits", "color_logits"):
+            setattr(model, name, torch.nn.Parameter(getattr(model, name).data[k]))
+        model.object_ids = model.object_ids[k]
+    model.rebind()
 
 
 def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, ids) -> None:
@@ -72,7 +148,7 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
 
 
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
-                     max_new: int) -> int:
+                     max_new: int, levels: int = 6) -> int:
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
@@ -98,32 +174,65 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     lo, hi = uv.min(0), uv.max(0)
     extent = hi - lo
     lo, hi = lo - 1.5 * extent, hi + 1.5 * extent
-    while True:                       # coarsen until every empty cell fits in the budget (no holes)
-        size = np.ceil((hi - lo) / cell).astype(int)
-        grid = np.full(tuple(size[::-1]), -1, np.int64)
-        cells = np.floor((uv - lo) / cell).astype(int)
-        grid[cells[:, 1], cells[:, 0]] = np.arange(len(ground))
-        empty = (grid < 0).astype(np.uint8)
-        if empty.sum() <= max_new:
-            break
-        cell *= 1.25
+    cell = max(cell, float((hi - lo).max()) / 2048.0)      # bound the fine grid
+    size = np.ceil((hi - lo) / cell).astype(int)
+    # fine cells covered by what was observed: every static Gaussian over its footprint (far
+    # ground has large ones; things standing on the ground cover the ground under them)
+    static = np.flatnonzero(np.isin(ids, static_ids) & (opac > 0.1))
+    occupied = np.zeros(tuple(size[::-1]), bool)
+    ouv = np.c_[means[static] @ e1, means[static] @ e2]
+    ocells = np.floor((ouv - lo) / cell).astype(int)
+    inside = np.all((ocells >= 0) & (ocells < size), axis=1)
+    ocells, oscale = ocells[inside], scales[static[inside], :2].max(1)
+    reach = np.minimum(np.floor(oscale / cell).astype(int), 16)
+    for r in np.unique(reach):
+        sel = reach == r
+        for dy in range(-r, r + 1):
+            for dx in range(-r, r + 1):
+                occupied[np.clip(ocells[sel, 1] + dy, 0, size[1] - 1), np.clip(ocells[sel, 0] + dx, 0, size[0] - 1)] = True
+    empty = (~occupied).astype(np.uint8)
     if empty.sum() == 0:
         return 0
-    _, labels = cv2.distanceTransformWithLabels(empty, cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL)
-    # map distance-transform labels (one per zero pixel) back to the observed Gaussian in that cell
-    zero_rows, zero_cols = np.nonzero(empty == 0)
+    dist = cv2.distanceTransform(empty, cv2.DIST_L2, 5)
+    # colour of an added cell: the nearest observed ground Gaussian's
+    grid = np.full(tuple(size[::-1]), -1, np.int64)
+    cells = np.floor((uv - lo) / cell).astype(int)
+    grid[cells[:, 1], cells[:, 0]] = np.arange(len(ground))
+    no_ground = (grid < 0).astype(np.uint8)
+    _, labels = cv2.distanceTransformWithLabels(no_ground, cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL)
+    zero_rows, zero_cols = np.nonzero(no_ground == 0)
     label_to_gauss = np.full(labels.max() + 1, -1, np.int64)
     label_to_gauss[labels[zero_rows, zero_cols]] = grid[zero_rows, zero_cols]
-    rows, cols = np.nonzero(empty)
-    src = label_to_gauss[labels[rows, cols]]
-    ok = src >= 0
-    rows, cols, src = rows[ok], cols[ok], ground[src[ok]]
-    pu = lo[0] + (cols + rng.random(len(cols))) * cell
-    pv = lo[1] + (rows + rng.random(len(rows))) * cell
-    pts = pu[:, None] * e1 + pv[:, None] * e2 + d * n
+    # rings of growing cells: level L (cells 2^L fine cells wide) fills the empty cells whose
+    # distance to the observed ground (in fine cells) is in [2^(L+1) - 2, 2^(L+2) - 2)
+    pts_all, src_all, size_all = [], [], []
+    for level in range(levels):
+        step = 2 ** level
+        lo_d = 2 ** (level + 1) - 2
+        hi_d = np.inf if level == levels - 1 else 2 ** (level + 2) - 2
+        rows, cols = np.mgrid[0:(size[1] + step - 1) // step, 0:(size[0] + step - 1) // step]
+        cr = np.minimum(rows * step + step // 2, size[1] - 1).ravel()
+        cc = np.minimum(cols * step + step // 2, size[0] - 1).ravel()
+        d_c = dist[cr, cc]
+        take = (empty[cr, cc] > 0) & (d_c >= lo_d) & (d_c < hi_d)
+        src = label_to_gauss[labels[cr[take], cc[take]]]
+        ok = src >= 0
+        r, c = rows.ravel()[take][ok], cols.ravel()[take][ok]
+        side = cell * step
+        pu = lo[0] + (c + 0.5 + 0.3 * (rng.random(len(c)) - 0.5)) * side
+        pv = lo[1] + (r + 0.5 + 0.3 * (rng.random(len(r)) - 0.5)) * side
+        pts_all.append(pu[:, None] * e1 + pv[:, None] * e2 + d * n)
+        src_all.append(ground[src[ok]])
+        size_all.append(np.full(len(c), side))
+    pts, src, side = np.concatenate(pts_all), np.concatenate(src_all), np.concatenate(size_all)
+    if len(pts) > max_new:                                   # keep the inner rings, drop the farthest
+        order = np.argsort(side, kind="stable")[:max_new]
+        pts, src, side = pts[order], src[order], side[order]
     k = len(pts)
+    if k == 0:
+        return 0
     quats = np.tile(_quat_from_normal(n), (k, 1))
-    sc = np.c_[np.full(k, cell * 0.8), np.full(k, cell * 0.8), np.full(k, cell * 0.15)]
+    sc = np.c_[side * 0.8, side * 0.8, side * 0.15]
     jitter = 1.0 + 0.04 * rng.standard_normal((k, 1))
     _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors[src] * jitter, 0, 1), np.full(k, label))
     return k
@@ -195,11 +304,24 @@ def _complete_symmetry(model: DynamicGaussians, clip: GeneratedClip, dynamic: di
 
 def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: int = 0,
              reference: dict | None = None, max_ground: int = 12000) -> dict[str, int]:
-    """Add ground and far-side Gaussians to a fitted model (in place); returns how many of each."""
+    """Add ground and far-side Gaussians to a fitted model (in place); returns how many of each.
+
+    Ground cells also fill the gaps that the input views see between observed Gaussians (far
+    ground seen at a grazing angle is sparse in 3D), so a short fit should follow to blend them
+    in; far-side Gaussians that an input view shows (a wrong silhouette) are dropped."""
     rng = np.random.default_rng([seed, 11])
-    ground = _complete_ground(model, clip, dynamic, rng, max_ground)
+    first = model.num
+    _complete_ground(model, clip, dynamic, rng, max_ground)
+    near = _near_cameras(model, clip, first)
+    if near.any():                   # the affine (EWA) footprint of a disc that close is unreliable
+        keep = np.ones(model.num, bool)
+        keep[first:] = ~near
+        _subset(model, keep)
+    ground = model.num - first
     from ..language.vocabulary import word_to_setting
 
     background = {i for i, name in clip.labels.items() if word_to_setting(name.lower())}
-    sym = _complete_symmetry(model, clip, dynamic, reference, background)
+    first = model.num
+    _complete_symmetry(model, clip, dynamic, reference, background)
+    sym = _drop_seen(model, clip, first)
     return {"ground": ground, "symmetry": sym}

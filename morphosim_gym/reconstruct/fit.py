@@ -64,6 +64,9 @@ class ClipTensors:
         self.rgb = torch.from_numpy(clip.frames.astype(np.float32) / 255.0)
         self.depth = torch.from_numpy(clip.depth.astype(np.float32))
         self.masks = torch.from_numpy(clip.masks.astype(np.int64))
+        # pixels with a depth but no instance (translucent matter such as particles in water):
+        # their colour and depth are fitted, their instance is left free
+        self.mask_valid = ~((self.masks < 0) & (self.depth > 0))
         self.instance_ids = list(instance_ids)
         self.viewmats = torch.from_numpy(np.stack([c.world_to_camera for c in clip.cameras]).astype(np.float32))
         self.Ks = torch.from_numpy(np.stack([c.K for c in clip.cameras]).astype(np.float32))
@@ -191,7 +194,7 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         target = data.rgb[t]
         loss = photometric_loss(rgb, target, cfg.w_ssim)
         loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha)
-        loss = loss + cfg.w_mask * mask_loss(soft, data.onehot(t))
+        loss = loss + cfg.w_mask * mask_loss(soft, data.onehot(t), data.mask_valid[t])
         loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
         if model.node_trans.shape[1]:
             if tracks is not None:

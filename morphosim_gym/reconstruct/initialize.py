@@ -3,6 +3,8 @@
 * every instance of the masks is lifted with the depth prior; an instance whose lifted
   tracks move rigidly by more than `motion_threshold` (fraction of the scene depth) is
   dynamic, the others are static;
+* pixels with a depth but no instance (translucent matter) are lifted into the static
+  setting instance (`unlabelled_host`);
 * static instances are fused from several frames into one point set (a voxel per pixel
   footprint), dynamic ones are brought back to their reference frame (where their mask
   is largest) with the per-frame rigid poses estimated from tracks (Kabsch, robust);
@@ -21,7 +23,7 @@ from ..scene import GeneratedClip
 from .lifting import PointSet, backproject, instance_motion, voxel_downsample
 from .model import DynamicGaussians
 
-__all__ = ["InitConfig", "InitResult", "initialize"]
+__all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,20 @@ def _disc_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return _normal_quats(normals, rng)
 
 
+def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
+    """The static instance that pixels with a depth but no instance are lifted into (the
+    setting, e.g. particles in the water), or None to leave them out: the static instance named
+    by a setting word, else the static instance with the largest mask."""
+    if not static_ids or not np.any((clip.masks < 0) & (clip.depth > 0)):
+        return None
+    from ..language.vocabulary import word_to_setting
+
+    for i in static_ids:
+        if word_to_setting(clip.labels.get(i, "").lower()):
+            return i
+    return max(static_ids, key=lambda i: int((clip.masks == i).sum()))
+
+
 def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int = 0) -> InitResult:
     """Build the initial `DynamicGaussians` of a clip (never reads `clip.ground_truth`)."""
     cfg = config or InitConfig()
@@ -108,8 +124,11 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
         poses[inst] = (rots, trans)
 
     static_sets, dyn_sets = [], {}
+    host = unlabelled_host(clip, [i for i in ids if not dynamic[i]])
     for t in frames:
         ps = backproject(clip, t)
+        if host is not None:
+            ps.ids = np.where(ps.ids < 0, host, ps.ids)
         static = np.isin(ps.ids, [i for i in ids if not dynamic[i]])
         static_sets.append(ps.subset(static))
     for inst in ids:

@@ -51,9 +51,15 @@ def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor) ->
     return ((pred[valid] - target[valid]).abs() / target[valid]).mean()
 
 
-def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor) -> torch.Tensor:
-    """MSE between rendered soft instance maps [H, W, K] and one-hot masks [H, W, K]."""
-    return ((soft - target_onehot) ** 2).mean()
+def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
+    """MSE between rendered soft instance maps [H, W, K] and one-hot masks [H, W, K], over the
+    `valid` [H, W] pixels (all by default)."""
+    err = ((soft - target_onehot) ** 2).sum(-1) / soft.shape[-1]
+    if valid is None:
+        return err.mean()
+    if not valid.any():
+        return soft.sum() * 0.0
+    return err[valid].mean()
 
 
 def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:

@@ -18,7 +18,7 @@ import hashlib
 import json
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +30,7 @@ from .fit import FitConfig, fit
 from .initialize import InitConfig, initialize
 from .lifting import estimate_background_color
 
-__all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key"]
+__all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
 CACHE_VERSION = 1
 
@@ -43,6 +43,7 @@ class ReconstructionConfig:
         init, fit, features: the settings of each stage.
         complete: add Gaussians for what the input view never saw (ground beyond the view,
             the far side of objects).
+        complete_iterations: fit iterations after completion (blend the added ground in).
         seed: random seed (same clip, config and seed: the same scene).
         cache: load / store results in `cache_dir` (default `$MORPHOSIM_CACHE/reconstruct`).
         cache_dir: cache location, or None for the default.
@@ -53,6 +54,7 @@ class ReconstructionConfig:
     fit: FitConfig = field(default_factory=FitConfig)
     features: FeatureConfig = field(default_factory=FeatureConfig)
     complete: bool = True
+    complete_iterations: int = 200
     seed: int = 0
     cache: bool = True
     cache_dir: str | None = None
@@ -87,7 +89,8 @@ def cache_key(clip: GeneratedClip, config: ReconstructionConfig) -> str:
     return h.hexdigest()[:32]
 
 
-def _cache_path(clip: GeneratedClip, config: ReconstructionConfig) -> Path:
+def cache_path(clip: GeneratedClip, config: ReconstructionConfig) -> Path:
+    """Where `reconstruct(clip, config)` stores its result (whether or not caching is on)."""
     root = Path(config.cache_dir) if config.cache_dir else Path(
         os.environ.get("MORPHOSIM_CACHE", Path.home() / ".cache" / "morphosim_gym")) / "reconstruct"
     return root / f"{cache_key(clip, config)}.msim"
@@ -112,7 +115,7 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
     clip lacks what the method needs."""
     cfg = config or ReconstructionConfig()
     validate_clip(clip)
-    path = _cache_path(clip, cfg) if cfg.cache else None
+    path = cache_path(clip, cfg) if cfg.cache else None
     if path is not None and path.exists():
         return load_scene(path)
     start = time.perf_counter()
@@ -126,6 +129,12 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
         from .completion import complete
 
         complete(model, clip, init.dynamic, seed=cfg.seed, reference=init.reference)
+        if cfg.complete_iterations > 0:
+            # no densification in this short pass: only blend in what completion added
+            polish = replace(fit_cfg, iterations=cfg.complete_iterations,
+                             strategy=replace(fit_cfg.strategy, refine_start=cfg.complete_iterations + 1))
+            fit_log["complete"] = fit(model, clip, init.reference, init.dynamic, polish, seed=cfg.seed + 1,
+                                      background=background)
     decoders, feat_log = distill_features(model, clip, feat_cfg, seed=cfg.seed)
     gaussians, motion = model.to_scene_parts()
     ids = sorted(int(i) for i in np.unique(clip.masks) if i >= 0)
@@ -147,6 +156,4 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
 
 
 def _no_progress(c: Any) -> Any:
-    from dataclasses import replace
-
     return replace(c, progress=False)

@@ -138,6 +138,9 @@ class Motion:
         return Motion(**arrays)
 
 
+_SKIN_CHUNK = 4096   # Gaussians per parallel task of the skinning kernel
+
+
 def skin(means: np.ndarray, quats: np.ndarray, skin_nodes: np.ndarray, skin_weights: np.ndarray,
          node_rotations: np.ndarray, node_translations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Linear blend skinning of Gaussians: means [N, 3] and quats [N, 4] moved by nodes [K]."""
@@ -148,8 +151,12 @@ def skin(means: np.ndarray, quats: np.ndarray, skin_nodes: np.ndarray, skin_weig
     t = np.ascontiguousarray(node_translations, dtype=np.float64)
     out_m = np.empty((means.shape[0], 3), dtype=np.float32)
     out_q = np.empty((means.shape[0], 4), dtype=np.float32)
-    _skin_kernel(np.ascontiguousarray(means, dtype=np.float32), np.ascontiguousarray(quats, dtype=np.float32),
-                 skin_nodes, skin_weights, mats, q, t, out_m, out_q)
+    args = (np.ascontiguousarray(means, dtype=np.float32), np.ascontiguousarray(quats, dtype=np.float32),
+            skin_nodes, skin_weights, mats, q, t, out_m, out_q)
+    if means.shape[0] <= _SKIN_CHUNK:
+        _skin_range(0, means.shape[0], *args)     # one chunk: skip the parallel launch
+    else:
+        _skin_kernel(*args)
     return out_m, out_q
 
 
@@ -214,7 +221,7 @@ def _skin_range(start, stop, means, quats, nodes, weights, mats, nq, nt, out_m, 
 @numba.njit(cache=True, parallel=True, nogil=True)
 def _skin_kernel(means, quats, nodes, weights, mats, nq, nt, out_m, out_q):  # pragma: no cover
     n = means.shape[0]
-    chunk = 4096
+    chunk = _SKIN_CHUNK
     n_chunks = (n + chunk - 1) // chunk
     for c in numba.prange(n_chunks):
         _skin_range(c * chunk, min(n, (c + 1) * chunk), means, quats, nodes, weights, mats, nq, nt, out_m, out_q)

@@ -1,0 +1,89 @@
+#!/usr/bin/env python
+"""Reconstruction quality and time on the generator's example prompts (issue #5 bars).
+
+    python benchmarks/reconstruct.py [--prompts all|paper] [--size 128] [--json out.json]
+
+For each prompt: generate the 49-frame clip, fit the 4D scene from the clip alone (never its
+ground truth; any cached result is deleted first, so the time is a real fit; the fitted scene
+is left in the cache for benchmarks/edit_quality.py), then measure input-view PSNR/SSIM,
+novel-view PSNR/SSIM at yaw +-15 and +-30 degrees against renders of the clip's ground truth,
+per-object instance IoU on input views and the feature field's semantic precision / recall
+(`morphosim_gym.reconstruct.report`). Prints one row per prompt and the bars.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+import morphosim_gym as ms
+from morphosim_gym.generate.examples import EXAMPLE_PROMPTS, PAPER_SCENES
+from morphosim_gym.reconstruct import ReconstructionConfig
+from morphosim_gym.reconstruct.pipeline import cache_path
+from morphosim_gym.reconstruct.report import quality_report
+
+BARS = {"input_psnr": 30.0, "novel15_psnr": 24.0, "novel30_psnr": 21.0, "iou": 0.9, "seconds": 120.0}
+
+
+def measure(sim: ms.MorphoSim, prompt: str, seed: int) -> dict:
+    """Generate, reconstruct (timed) and report one prompt."""
+    clip = sim.generate_clip(prompt, seed)
+    # a real fit every time; the result is left in the cache for benchmarks/edit_quality.py
+    cache_path(clip, sim.config.reconstruction_config).unlink(missing_ok=True)
+    start = time.perf_counter()
+    scene = sim.reconstruct(clip)
+    seconds = time.perf_counter() - start
+    report = quality_report(clip, scene, seconds=seconds)
+    report["prompt"] = prompt
+    return report
+
+
+def row(r: dict) -> dict:
+    """The numbers the bars look at."""
+    n = r["novel"]
+    return {"input_psnr": r["input"]["psnr"], "novel15_psnr": min(n["-15"]["psnr"], n["+15"]["psnr"]),
+            "novel30_psnr": min(n["-30"]["psnr"], n["+30"]["psnr"]), "iou": min(r["instance_iou"].values()),
+            "seconds": r["seconds"],
+            "semantic_pr": min((min(v["precision"], v["recall"]) for v in r.get("semantic", {}).values()),
+                               default=0.0)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--prompts", choices=("all", "paper"), default="all")
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--cache-dir", default=None, help="where fitted scenes are left (default: the package cache)")
+    args = ap.parse_args()
+    prompts = EXAMPLE_PROMPTS if args.prompts == "all" else tuple(p for p, _ in PAPER_SCENES)
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=args.size, height=args.size),
+                       reconstruction_config=ReconstructionConfig(progress=False, cache_dir=args.cache_dir))
+    reports = []
+    print(f"{'prompt':58s} {'input':>6s} {'+-15':>6s} {'+-30':>6s} {'IoU':>5s} {'sem':>5s} {'time':>6s}  load")
+    for prompt in prompts:
+        r = measure(sim, prompt, args.seed)
+        r["load"] = os.getloadavg()[0]
+        reports.append(r)
+        x = row(r)
+        print(f"{prompt[:58]:58s} {x['input_psnr']:6.2f} {x['novel15_psnr']:6.2f} {x['novel30_psnr']:6.2f} "
+              f"{x['iou']:5.3f} {x['semantic_pr']:5.3f} {x['seconds']:5.1f}s  {r['load']:.1f}", flush=True)
+    rows = [row(r) for r in reports]
+    print("\nbars (worst prompt):")
+    for key, bar in BARS.items():
+        vals = [x[key] for x in rows]
+        worst = max(vals) if key == "seconds" else min(vals)
+        ok = worst <= bar if key == "seconds" else worst >= bar
+        print(f"  {'MET ' if ok else 'MISS'} {key:14s} bar {bar:6.1f}  worst {worst:7.2f}  median {np.median(vals):7.2f}")
+    if args.json:
+        args.json.write_text(json.dumps({"size": args.size, "seed": args.seed, "reports": reports}, indent=2))
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
