@@ -196,6 +196,8 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha)
         loss = loss + cfg.w_mask * mask_loss(soft, data.onehot(t), data.mask_valid[t])
         loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
+        # depth but no instance: translucent matter, drawn but thinner than the background behind it
+        loss = loss + cfg.w_empty * empty_alpha_loss(torch.relu(alpha - 0.5), ~data.mask_valid[t])
         if model.node_trans.shape[1]:
             if tracks is not None:
                 pts, tn, tw, tuv, tvis = tracks
