@@ -146,9 +146,10 @@ class Suite:
         return replace(self, episodes=_positive_int(episodes, "episodes", self.source))
 
     def digest(self) -> str:
-        """A content hash of everything that decides the episodes (not the file path)."""
-        data = {"name": self.name, "env": self.env_id, "task": _spec_dict(self.task), "seed": self.seed,
-                "episodes": self.episodes, "env_kwargs": dict(self.env_kwargs), "frames": self.frames,
+        """A content hash of everything that decides what an episode of a given seed is (not the file
+        path, nor which seeds run: a sweep resumed with more episodes keeps the ones it has)."""
+        data = {"name": self.name, "env": self.env_id, "task": _spec_dict(self.task),
+                "env_kwargs": dict(self.env_kwargs), "frames": self.frames,
                 "perturbations": [asdict(p) for p in self.perturbations]}
         return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
