@@ -12,8 +12,9 @@ sees the same policy seed as its base twin.
 
     morphosim bench track --policy my_pkg.policies:make_policy
 
-Built-ins: `random` (uniform actions from the seed) and `oracle` (a scripted controller per
-task that reads the true target position; see `oracles.py`).
+Built-ins: `random` (uniform actions from the seed), `oracle` (a scripted controller per
+task that reads the true target position; see `oracles.py`) and `color` (finds the target in
+the image by the instruction's colour word, Track and Find; see `color_policy.py`).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ PolicyFactory = Callable[[Any, int], Act]
 BUILTIN_POLICIES = {
     "random": "morphosim_gym.bench.policies:random_policy",
     "oracle": "morphosim_gym.bench.policies:oracle_policy",
+    "color": "morphosim_gym.bench.color_policy:color_policy",
 }
 
 
