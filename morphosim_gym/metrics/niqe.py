@@ -76,7 +76,7 @@ def _block_features(block: np.ndarray) -> list[float]:
         pair = block * np.roll(block, (-dy, -dx), axis=(0, 1))
         a, bl, br = aggd_fit(pair)
         mean = (br - bl) * gamma(2.0 / a) / gamma(1.0 / a) if np.isfinite(a) else float("nan")
-        feats += [a, mean, bl * bl, br * br]
+        feats += [a, mean, bl, br]                       # NIQE keeps the scales (BRISQUE squares them)
     return feats
 
 
@@ -116,17 +116,18 @@ def niqe_features(luma: np.ndarray) -> np.ndarray:
 
 
 def _luma(image: np.ndarray) -> np.ndarray:
-    """ITU-R BT.601 luma (the Y of YCbCr, as MATLAB's rgb2ycbcr) in [16, 235] of an RGB image."""
+    """ITU-R BT.601 luma (the Y of YCbCr, as MATLAB's rgb2ycbcr) in [16, 235] of an RGB image, rounded
+    to integers as the reference computes it from 8-bit images."""
     a = np.asarray(image)
     if a.dtype == np.uint8:
         a = a.astype(np.float64) / 255.0
     else:
         a = a.astype(np.float64)
     if a.ndim == 2:
-        return a * 255.0
+        return np.round(a * 255.0)
     if a.ndim != 3 or a.shape[2] not in (3, 4):
         raise ValueError(f"Expected an image [H, W] or [H, W, 3], found shape {a.shape}")
-    return 16.0 + a[..., :3] @ np.array([65.481, 128.553, 24.966])
+    return np.round(16.0 + a[..., :3] @ np.array([65.481, 128.553, 24.966]))    # 8-bit Y, as MATLAB's uint8 path
 
 
 def niqe(image: np.ndarray) -> float:

@@ -25,3 +25,15 @@ def test_policy_specs():
                        ("morphosim_gym.bench.policies:missing", "missing")]:
         with pytest.raises(ValueError, match=word):
             load_policy(spec)
+
+
+def test_color_policy_sees_the_colour_and_loses_a_recoloured_target(cache_dir):
+    runner = EpisodeRunner(load_suite("track"), cache_dir)
+    seeds = range(8)
+    base = [runner.run(EpisodeKey("color", "base", s)).record for s in seeds]
+    recoloured = [runner.run(EpisodeKey("color", "recolor_target", s)).record for s in seeds]
+    assert sum(r["success"] for r in base) >= 5
+    assert sum(r["success"] for r in recoloured) == 0
+    unsupported = EpisodeRunner(load_suite("reach"), cache_dir).run(EpisodeKey("color", "base", 0)).record
+    assert unsupported["status"] == "failed" and unsupported["error_stage"] == "policy"
+    assert "Track or Find" in unsupported["error"]

@@ -45,7 +45,9 @@ def test_niqe_on_a_natural_photograph_and_its_model():
     assert mu.shape == (36,) and cov.shape == (36, 36) and np.allclose(cov, cov.T)
     photo = skimage.data.astronaut()
     score = niqe(photo)
-    assert 3.0 < score < 7.0                      # natural photographs score about 3-6
+    # BasicSR 1.4.2's calculate_niqe (MATLAB-faithful; Y channel, no crop) gives 3.065 on this image and
+    # 4.115 on skimage's coffee; ours differs only in the half-scale resize
+    assert abs(score - 3.065) < 0.1 and abs(niqe(skimage.data.coffee()) - 4.115) < 0.1
     assert niqe(cv2.GaussianBlur(photo, (0, 0), 2.0)) > score + 2.0
     with pytest.raises(ValueError, match="96x96"):
         niqe(photo[:64, :64])
