@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.add_argument("--out", default="quality_report.md", help="the markdown report (a .json is written beside it)")
     q.add_argument("--size", type=int, default=384, help="rendered image width, pixels (at least 96: NIQE blocks)")
     q.add_argument("--yaws", default="-30,-15,15,30",
-                   help="novel-view yaw offsets, degrees, comma-separated (write --yaws=-30,30 when the first is negative)")
+                   help="novel-view yaw offsets, degrees, comma-separated (--yaws=-30,30 when the first is negative)")
     q.add_argument("--times", type=int, default=3, help="time samples per clip")
     q.add_argument("--seed", type=int, default=0, help="generation seed")
     q.add_argument("--detail", type=float, default=1.0, help="Gaussian budget multiplier of generated scenes")

@@ -83,8 +83,8 @@ def _markdown(suite: Suite, policies: list[str], records: list[dict], summaries:
     lines += [f"- scenes: `{suite.task.scenes.prompt}` (task `{suite.task.name}`), seeds {suite.seed}.."
               f"{suite.seed + suite.episodes - 1} ({suite.episodes} per condition)",
               f"- policies: {', '.join(f'`{p}`' for p in policies)}",
-              f"- every perturbed episode runs on the same scene, reset seed and policy seed as the base episode "
-              f"of its seed; Δ is perturbed minus base over those pairs, with a percentile-bootstrap 95% interval",
+              "- every perturbed episode runs on the same scene, reset seed and policy seed as the base episode "
+              "of its seed; Δ is perturbed minus base over those pairs, with a percentile-bootstrap 95% interval",
               f"- run: backend `{run.get('backend')}`, {run.get('workers')} worker(s), {run.get('ran')} episodes run "
               f"and {run.get('resumed')} resumed in {run.get('wall_s')} s "
               f"(suite digest `{suite.digest()}`)", "", "## Conditions", ""]

@@ -21,7 +21,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .backends import BACKENDS, Job, run_backend
-from .episode import EpisodeKey
+from .episode import EpisodeKey, EpisodeRunner
 from .layout import MANIFEST, RESULTS_LOG, frames_path
 from .policies import load_policy
 from .report import write_outputs
@@ -75,6 +75,14 @@ def _check_manifest(out: Path, suite: Suite) -> None:
     atomic_write_bytes(path, (json.dumps(mine, indent=2) + "\n").encode())
 
 
+def _check_env(suite: Suite, cache_dir: Optional[str]) -> None:
+    """Make the suite's env once here, so bad `env_kwargs` stop the sweep with one clear error."""
+    try:
+        EpisodeRunner(suite, cache_dir).env.close()
+    except (TypeError, ValueError) as exc:
+        raise SuiteError(f"Invalid env or env_kwargs in suite {suite.source}: {type(exc).__name__}: {exc}") from None
+
+
 def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: str = "local", workers: int = 1,
               cache_dir: Optional[str] = None, address: Optional[str] = None, progress: bool = True,
               report: bool = True) -> SweepResult:
@@ -85,6 +93,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
         raise ValueError(f"Expected one or more distinct policies, found {list(policies)!r}")
     for spec in policies:
         load_policy(spec)                              # an unknown policy stops the sweep before it starts
+    _check_env(suite, cache_dir)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     _check_manifest(out, suite)

@@ -87,7 +87,10 @@ def load_clip(path: Optional[str] = None) -> tuple[Optional[ClipScorer], Optiona
         return None, f"could not load CLIP from {str(folder)!r}: {type(exc).__name__}: {exc}"
 
 
-def load_qalign(path: Optional[str] = None) -> tuple[Optional[Callable[[Sequence[np.ndarray], str], list]], Optional[str]]:
+QAlignScore = Callable[[Sequence[np.ndarray], str], list]
+
+
+def load_qalign(path: Optional[str] = None) -> tuple[Optional[QAlignScore], Optional[str]]:
     """A Q-Align scorer `(images, task) -> scores` from `path` (or `$MORPHOSIM_QALIGN_MODEL`), or None
     and why not; `task` is "quality" or "aesthetic"."""
     folder, why = _model_dir(path, QALIGN_ENV)

@@ -55,7 +55,8 @@ SUITE_KEYS = ("name", "env", "description", "task", "scenes", "env_kwargs", "see
               "perturbations")
 PERTURBATION_KEYS = ("name", "description", "edits", "at", "camera")
 CAMERA_KEYS = ("orbit_deg", "pitch_deg", "distance_scale", "fov_y_deg")
-RESERVED_ENV_KWARGS = ("sim", "prompt", "target", "scene_seed", "scene_pool", "task", "render_mode")
+RESERVED_ENV_KWARGS = ("sim", "prompt", "target", "scene_seed", "scene_pool", "task", "render_mode", "on_edit_error",
+                       "disable_env_checker")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 

@@ -2,7 +2,6 @@
 
 import csv
 import json
-import time
 
 import pytest
 
@@ -16,13 +15,11 @@ from .conftest import REPO, strip_timing, write_suite
 @pytest.fixture(scope="module")
 def smoke_local(tmp_path_factory, cache_dir):
     out = tmp_path_factory.mktemp("smoke_local")
-    start = time.perf_counter()
-    result = run_sweep(load_suite("smoke"), ["oracle", "random"], out, cache_dir=cache_dir, progress=False)
-    return result, time.perf_counter() - start
+    return run_sweep(load_suite("smoke"), ["oracle", "random"], out, cache_dir=cache_dir, progress=False)
 
 
 def test_smoke_outputs_and_pairing(smoke_local):
-    result, _ = smoke_local
+    result = smoke_local
     suite = load_suite("smoke")
     n = 2 * len(suite.conditions) * suite.episodes
     assert len(result.records) == n and result.failed == 0
@@ -44,18 +41,15 @@ def test_smoke_outputs_and_pairing(smoke_local):
 
 
 @pytest.mark.slow
-def test_ray_backend_gives_identical_results_and_smoke_is_fast(smoke_local, tmp_path, cache_dir):
-    local, local_s = smoke_local
-    start = time.perf_counter()
+def test_ray_backend_gives_identical_results(smoke_local, tmp_path, cache_dir):
+    local = smoke_local
     ray_result = run_sweep(load_suite("smoke"), ["oracle", "random"], tmp_path / "ray", backend="ray", workers=2,
                            cache_dir=cache_dir, progress=False)
-    ray_s = time.perf_counter() - start
     assert strip_timing(ray_result.records) == strip_timing(local.records)
-    assert local_s + ray_s < 180, (local_s, ray_s)
 
 
 def test_process_pool_gives_identical_results(smoke_local, tmp_path, cache_dir):
-    local, _ = smoke_local
+    local = smoke_local
     suite = load_suite("smoke").with_episodes(2)
     pool = run_sweep(suite, ["oracle", "random"], tmp_path / "pool", workers=2, cache_dir=cache_dir,
                      progress=False, report=False)
@@ -109,3 +103,9 @@ def test_sweep_level_errors_exit_255(tmp_path, capsys):
     assert main(["bench", "no_such_suite", "--out", str(tmp_path / "x")]) == 255
     assert "no_such_suite" in capsys.readouterr().err
     assert main(["bench", "smoke", "--policy", "nope", "--out", str(tmp_path / "y")]) == 255
+    bad_kwargs = write_suite(tmp_path / "w.yaml", {"name": "w", "env": "MorphoSim/Track-v0", "env_kwargs": {"width": 3},
+                                                   "perturbations": [{"name": "p", "edits": "make the {target} red"}]})
+    assert main(["bench", str(bad_kwargs), "--out", str(tmp_path / "z")]) == 255
+    err = capsys.readouterr().err
+    assert "env_kwargs" in err and "width" in err and str(bad_kwargs) in err
+    assert not (tmp_path / "z" / "results.jsonl").exists()
