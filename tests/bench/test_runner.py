@@ -99,6 +99,13 @@ def test_bad_input_is_recorded_per_episode_and_counted_in_the_exit_status(tmp_pa
     assert by[("oracle", "late_failure", 0)]["steps"] == 0      # the record says nothing ran past the failure
 
 
+def test_list_shows_the_shipped_suites(capsys):
+    assert main(["bench", "--list"]) == 0
+    listed = capsys.readouterr().out
+    for name in ("smoke", "track", "reach", "find"):
+        assert name in listed
+
+
 def test_sweep_level_errors_exit_255(tmp_path, capsys):
     assert main(["bench", "no_such_suite", "--out", str(tmp_path / "x")]) == 255
     assert "no_such_suite" in capsys.readouterr().err
