@@ -189,7 +189,7 @@ class EpisodeRunner:
         record["return"] = total
         if not keep:
             return None
-        last = shots[max(shots)]
+        last = obs["rgb"]                     # an episode that ended early shows its final frame from then on
         return np.stack([shots.get(k, last) for k in keep])
 
 

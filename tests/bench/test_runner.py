@@ -116,3 +116,12 @@ def test_sweep_level_errors_exit_255(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "env_kwargs" in err and "width" in err and str(bad_kwargs) in err
     assert not (tmp_path / "z" / "results.jsonl").exists()
+
+
+def test_frames_of_an_episode_that_ends_early_show_its_end(cache_dir):
+    from morphosim_gym.bench import EpisodeKey, EpisodeRunner
+
+    res = EpisodeRunner(load_suite("find"), cache_dir).run(EpisodeKey("oracle", "narrow_camera", 0), frames=5)
+    assert res.record["terminated"] and res.record["steps"] < 30
+    f = res.frames
+    assert f.shape[0] == 5 and (f[-1] == f[-2]).all() and not (f[-1] == f[0]).all()
