@@ -21,6 +21,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "morphosim_gym.scene.cli",
     "morphosim_gym.language.cli",
     "morphosim_gym.viewer.cli",
+    "morphosim_gym.bench.cli",
 )
 
 

@@ -16,7 +16,7 @@ from typing import Any, Optional
 
 from .errors import CommandError
 from .generate.compose import GenerationConfig
-from .scene import GeneratedClip, Scene4D, load_clip, save_clip
+from .scene import GeneratedClip, Scene4D, SceneFileError, load_clip, load_scene, save_clip, save_scene
 
 __all__ = ["MorphoSim", "SimConfig", "RECONSTRUCTIONS", "default_cache_dir"]
 
@@ -42,7 +42,8 @@ class SimConfig:
         reconstruction_config: settings of the "fit" reconstruction.
         generation: clip size, length and detail.
         render_backend: renderer used for frames ("cpu").
-        cache: cache generated clips on disk by content hash.
+        cache: cache on disk by content hash: generated clips, and with `reconstruction="oracle"`
+            the composed scenes `generate` returns (`.msim` files under `cache_dir/scene/`).
         cache_dir: where; None = `default_cache_dir()`.
     """
 
@@ -134,14 +135,15 @@ class MorphoSim:
         `reconstruction="oracle"` the generator's ground truth is composed directly (the same
         scene as `generate_clip(...).ground_truth`, without rendering the clip's frames)."""
         plan = self.parse(prompt)
-        if self.config.reconstruction == "oracle" and not self.config.cache:
+        if self.config.reconstruction == "oracle":
             # the ground truth is all the oracle path keeps: compose it without rendering the clip
             if plan.mode != "generate":
                 raise CommandError(f"Expected a command that describes a scene to generate, found an edit command "
                                    f"({prompt!r}); use sim.edit(scene, text) for edits")
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
                 raise ValueError(f"Expected seed as a non-negative integer, found {seed!r}")
-            scene = self._generator.compose(plan, seed, prompt).scene
+            scene = self._cached_oracle_scene(plan, prompt, seed) if self.config.cache else \
+                self._generator.compose(plan, seed, prompt).scene
         else:
             scene = self.reconstruct(self.generate_clip(prompt, seed))
         for follow in plan.then:
@@ -155,12 +157,25 @@ class MorphoSim:
         return self.editor.edit(scene, text)
 
     # ---------------------------------------------------------------- cache
-    def _cache_path(self, kind: str, prompt: str, seed: int) -> Path:
+    def _cached_oracle_scene(self, plan: Any, prompt: str, seed: int) -> Scene4D:
+        """The composed ground truth of a prompt, through the on-disk cache: parallel workers (a
+        benchmark sweep) generate each scene once and load it bit-exact (writes are atomic)."""
+        path = self._cache_path("scene", prompt, seed, ".msim")
+        if path.exists():
+            try:
+                return load_scene(path)
+            except SceneFileError:                  # a damaged entry: compose again and replace it
+                pass
+        scene = self._generator.compose(plan, seed, prompt).scene
+        save_scene(scene, path, history=False)
+        return scene
+
+    def _cache_path(self, kind: str, prompt: str, seed: int, suffix: str = ".mclip") -> Path:
         root = Path(self.config.cache_dir) if self.config.cache_dir else default_cache_dir()
         key = json.dumps({"prompt": prompt, "seed": seed, "generation": asdict(self.config.generation),
                           "generator": self.config.generator, "version": 1}, sort_keys=True)
         digest = hashlib.sha256(key.encode()).hexdigest()[:24]
-        return root / kind / f"{digest}.mclip"
+        return root / kind / f"{digest}{suffix}"
 
     def __repr__(self) -> str:
         c = self.config

@@ -19,6 +19,7 @@ similarity with the objects' names and categories (floor `SCENE_FLOOR`: "the veh
 
 from __future__ import annotations
 
+import re
 import threading
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -173,6 +174,12 @@ def _describe(items: Sequence[SceneItem]) -> str:
     return ", ".join(f"{it.name} ({it.category})" if it.name != it.category else it.name for it in items) or "none"
 
 
+def _numbered_base(name: str) -> str | None:
+    """'ball' for the generator's numbered duplicate names ('ball_2'), None for other names."""
+    m = re.fullmatch(r"(.+)_\d+", name)
+    return m.group(1) if m else None
+
+
 def resolve_in_scene(noun: str, items: Sequence[SceneItem], text: str | None = None,
                      color: tuple[float, float, float] | None = None) -> list[SceneItem]:
     """The scene objects a target noun refers to.
@@ -195,6 +202,9 @@ def resolve_in_scene(noun: str, items: Sequence[SceneItem], text: str | None = N
         return hits
     sing = singular(noun)
     hits = [it for it in items if it.name.lower() in (noun, sing) or singular(it.name.lower()) == sing]
+    if color is not None and hits:
+        # "the blue ball" among "ball" and "ball_2": numbered siblings share the noun, the colour picks
+        hits += [it for it in items if it not in hits and _numbered_base(it.name.lower()) in (noun, sing)]
     if not hits:
         g = ground_noun_vocabulary(noun, settings=True) or ground_noun_vocabulary(sing, settings=True)
         if g is not None:

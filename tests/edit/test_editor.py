@@ -124,3 +124,16 @@ def test_compound_prompt_applies_follow_up_edits(sim):
     scene = sim.generate("a red cube moves to the plate; then make the cube blue", seed=0)
     assert scene.object("cube").color == pytest.approx((0.0, 0.0, 1.0))
     assert scene.history == ("make the cube blue",)
+
+
+def test_colour_picks_among_numbered_objects_of_one_noun(sim):
+    """'the blue ball' among 'ball' (red) and 'ball_2' (blue): the colour decides; no colour keeps the first."""
+    scene = sim.generate("a red ball moves from left to right next to a blue ball and a red cube", seed=3)
+    names = {o.name: o.id for o in scene.objects}
+    assert {"ball", "ball_2", "cube"} <= set(names)
+    assert [o.name for o in sim.edit(scene, "delete the blue ball").objects if o.category == "ball"] == ["ball"]
+    assert [o.name for o in sim.edit(scene, "delete the red ball").objects if o.category == "ball"] == ["ball_2"]
+    green = sim.edit(scene, "make the blue ball green")
+    assert green.object("ball_2").color != scene.object("ball_2").color
+    assert green.object("ball").color == scene.object("ball").color
+    assert [o.name for o in sim.edit(scene, "delete the ball").objects if o.category == "ball"] == ["ball_2"]
