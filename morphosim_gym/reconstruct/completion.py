@@ -110,8 +110,8 @@ def _drop_seen(model: DynamicGaussians, clip: GeneratedClip, first: int, thresho
 
 
 def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int, sigmas: float = 3.0) -> np.ndarray:
-    """[N - first] Gaussians from index `first` on whose camera depth in some input frame is below
-    `sigmas` times their largest scale (including behind the camera)."""
+    """[N - first] Gaussians from index `first` on whose camera depth in some input frame is within
+    `sigmas` times their largest scale of the camera plane (in front of it or behind)."""
     near = np.zeros(model.num - first, bool)
     with torch.no_grad():
         reach = sigmas * model.scales()[first:].max(dim=1).values.numpy()
@@ -119,8 +119,38 @@ def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int, sigm
             means, _ = model.warp(t)
             cam = clip.cameras[t]
             z = means[first:].numpy().astype(np.float64) @ cam.world_to_camera[2, :3] + cam.world_to_camera[2, 3]
-            near |= z < reach
+            near |= np.abs(z) < reach      # wholly behind the camera is fine: it is culled
     return near
+
+
+def _split_near(model: DynamicGaussians, clip: GeneratedClip, first: int, splits: int = 6) -> int:
+    """Ground discs from index `first` on that come too close to an input camera (`_near_cameras`:
+    their affine footprint would be wrong) are split into four discs of half the size, up to
+    `splits` times; those still too close are dropped. Returns how many discs are left."""
+    for _ in range(splits + 1):
+        near = _near_cameras(model, clip, first)
+        if not near.any():
+            break
+        idx = first + np.flatnonzero(near)
+        keep = np.ones(model.num, bool)
+        keep[idx] = False
+        with torch.no_grad():
+            means = model.means[idx].numpy().astype(np.float64)
+            quats = model.quats[idx].numpy()
+            scales = model.scales()[idx].numpy()
+            opac = model.opacities()[idx].numpy()
+            colors = model.colors()[idx].numpy()
+            axes = quat_to_rotmat(model.quats[idx]).numpy()        # columns: the disc's axes
+        ids = model.object_ids[idx].numpy()
+        _subset(model, keep)
+        if _ == splits:
+            break
+        quarter = scales[:, :1] / 0.8 / 4.0                         # a quarter of the cell side
+        children = [means + (a * axes[:, :, 0] + b * axes[:, :, 1]) * quarter
+                    for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+        _append(model, np.concatenate(children), np.tile(quats, (4, 1)), np.tile(scales * [0.5, 0.5, 0.5], (4, 1)),
+                np.tile(opac, 4), np.tile(colors, (4, 1)), np.tile(ids, 4))
+    return model.num - first
 
 
 def _subset(model: DynamicGaussians, keep: np.ndarray) -> None:
@@ -148,7 +178,7 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
 
 
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
-                     max_new: int, levels: int = 6) -> int:
+                     max_new: int, levels: int = 7, spread: float = 3.0) -> int:
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
@@ -173,7 +203,7 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     cell = float(np.median(scales[ground, :2])) * 3.0
     lo, hi = uv.min(0), uv.max(0)
     extent = hi - lo
-    lo, hi = lo - 1.5 * extent, hi + 1.5 * extent
+    lo, hi = lo - spread * extent, hi + spread * extent
     cell = max(cell, float((hi - lo).max()) / 2048.0)      # bound the fine grid
     size = np.ceil((hi - lo) / cell).astype(int)
     # fine cells covered by what was observed: every static Gaussian over its footprint (far
@@ -312,12 +342,7 @@ def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: 
     rng = np.random.default_rng([seed, 11])
     first = model.num
     _complete_ground(model, clip, dynamic, rng, max_ground)
-    near = _near_cameras(model, clip, first)
-    if near.any():                   # the affine (EWA) footprint of a disc that close is unreliable
-        keep = np.ones(model.num, bool)
-        keep[first:] = ~near
-        _subset(model, keep)
-    ground = model.num - first
+    ground = _split_near(model, clip, first)
     from ..language.vocabulary import word_to_setting
 
     background = {i for i, name in clip.labels.items() if word_to_setting(name.lower())}
