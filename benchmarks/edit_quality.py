@@ -78,11 +78,12 @@ def recolor_scores(sim: ms.MorphoSim, scene: ms.Scene4D, name: str, colour: str)
 
 
 def centroids(scene: ms.Scene4D, oid: int) -> np.ndarray:
-    """Image centroid of an object in every frame, from the generation camera."""
+    """Image centroid of an object in every frame, from the generation camera at t = 0 (held
+    still, so that a moving generation camera does not add its own motion to the path)."""
     out = []
     for i in range(scene.num_frames):
         t = i / scene.fps
-        ys, xs = np.nonzero(ms.render(scene, scene.camera_at(t), t).instance == oid)
+        ys, xs = np.nonzero(ms.render(scene, scene.camera_at(0.0), t).instance == oid)
         out.append([xs.mean(), ys.mean()] if len(xs) else [np.nan, np.nan])
     return np.array(out)
 

@@ -48,6 +48,7 @@ def recolor(scene: Scene4D, selection: np.ndarray, mode: str, rgb: Sequence[floa
         if keep_shading and len(c):
             lum = _luminance(c)
             shade = np.clip(lum / max(float(lum.mean()), 1e-6), 0.6, 1.4)
+            shade /= shade.mean()            # the object's mean colour is the asked colour
             new = target[None, :] * shade[:, None]
         else:
             new = np.broadcast_to(target, c.shape)
