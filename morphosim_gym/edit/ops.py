@@ -47,8 +47,9 @@ def recolor(scene: Scene4D, selection: np.ndarray, mode: str, rgb: Sequence[floa
         target = np.asarray(rgb, dtype=np.float64)
         if keep_shading and len(c):
             lum = _luminance(c)
-            shade = np.clip(lum / max(float(lum.mean()), 1e-6), 0.6, 1.4)
-            shade /= shade.mean()            # the object's mean colour is the asked colour
+            # half the object's relative shading, averaging 1 so the object reads as the asked colour
+            shade = 1.0 + 0.5 * (np.clip(lum / max(float(lum.mean()), 1e-6), 0.6, 1.4) - 1.0)
+            shade /= shade.mean()
             new = target[None, :] * shade[:, None]
         else:
             new = np.broadcast_to(target, c.shape)
