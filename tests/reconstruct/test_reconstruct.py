@@ -101,9 +101,12 @@ def test_interrupted_run_leaves_no_cache_entry(clip, tmp_path):
     ms.save_clip(clip, path)
     cache = tmp_path / "cache"
     env = dict(os.environ, MORPHOSIM_CACHE=str(cache))
-    proc = subprocess.Popen([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--out",
-                             str(tmp_path / "out.msim")], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # far more iterations than can run before the interrupt, so the signal always lands mid-fit
+    proc = subprocess.Popen([sys.executable, "-m", "morphosim_gym.cli", "reconstruct", str(path), "--iterations",
+                             "1000000", "--out", str(tmp_path / "out.msim")], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
     time.sleep(8.0)
+    assert proc.poll() is None, "the reconstruction ended before it could be interrupted"
     proc.send_signal(signal.SIGINT)               # Ctrl-C mid-fit...
     try:
         proc.wait(timeout=30)
