@@ -44,7 +44,7 @@ def main() -> None:
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     gen = ms.GenerationConfig(width=args.size, height=args.size)
-    sim = ms.MorphoSim(generation=gen)
+    sim = ms.MorphoSim(generation=gen, reconstruction_config=ReconstructionConfig(progress=False))
     clip = sim.generate_clip(PROMPT, seed=0)
     scene = sim.reconstruct(clip)                       # cached after the first run
     sim.edit(scene, EDITS[0])                           # JIT, embedding model load
