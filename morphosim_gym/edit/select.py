@@ -30,9 +30,10 @@ import numpy as np
 from ..render import render
 from ..scene import Scene4D
 
-__all__ = ["Selection", "CandidateScorer", "MaskAgreementScorer", "Selector", "DEFAULT_THRESHOLDS"]
+__all__ = ["Selection", "CandidateScorer", "MaskAgreementScorer", "Selector", "DEFAULT_THRESHOLDS", "neighbourhood_mean"]
 
 DEFAULT_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
+GROW_FLOOR = 0.05   # own relevance a Gaussian needs before its neighbourhood can raise it
 
 
 @dataclass
@@ -161,8 +162,17 @@ class Selector:
 
     def _feature_field(self, scene: Scene4D, ids: tuple[int, ...], query: str) -> Selection:
         rel = self.relevance(scene, ids, query)
-        cands = np.stack([rel >= t for t in self.thresholds], axis=1).astype(np.float32)   # [N, C]
         times = np.linspace(0.0, scene.duration, max(1, self.times))
+        # two candidate families: the relevance itself, and the relevance raised to its spatial
+        # neighbourhood's mean (a Gaussian surrounded by the target joins it: thin parts seen at
+        # grazing angles, such as a roof, learn features blended with what lies behind them);
+        # only Gaussians with some relevance of their own are raised, so neighbours that clearly
+        # mean something else (the road under a bus) stay out
+        g = scene._at_shared(float(times[len(times) // 2])) if len(times) else scene.gaussians
+        near = neighbourhood_mean(g.means, rel, 3.0 * float(np.median(g.scales.max(axis=1))))
+        grown = np.where(rel >= GROW_FLOOR, np.maximum(rel, near), rel)
+        levels = [(t, rel) for t in self.thresholds] + [(t, grown) for t in self.thresholds]
+        cands = np.stack([r >= t for t, r in levels], axis=1).astype(np.float32)         # [N, C]
         soft, target = [], []
         for t in times:
             out = render(_with_features(scene._at_shared(t), cands), scene.camera_at(t), backend=self.backend,
@@ -171,8 +181,31 @@ class Selector:
             target.append(np.isin(out.instance, ids))
         scores = self.scorer(np.stack(soft), np.stack(target))
         best = int(np.argmax(scores))
-        return Selection(cands[:, best] > 0.5, ids, "feature_field", self.thresholds[best],
-                         [(t, float(s)) for t, s in zip(self.thresholds, scores)], rel)
+        return Selection(cands[:, best] > 0.5, ids, "feature_field", levels[best][0],
+                         [(t, float(s)) for (t, _), s in zip(levels, scores)], rel)
+
+
+def neighbourhood_mean(points: np.ndarray, values: np.ndarray, voxel: float) -> np.ndarray:
+    """[N] mean of `values` over the 3x3x3 voxels (of side `voxel`) around each point."""
+    if len(points) == 0 or not voxel > 0:
+        return values.astype(np.float64)
+    keys = np.floor(points / voxel).astype(np.int64)
+    keys -= keys.min(axis=0) - 1                          # >= 1, so every neighbour code is valid
+    dims = keys.max(axis=0) + 2
+    codes = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
+    uniq, inv = np.unique(codes, return_inverse=True)
+    sums = np.bincount(inv, weights=values.astype(np.float64), minlength=len(uniq))
+    counts = np.bincount(inv, minlength=len(uniq)).astype(np.float64)
+    total, n = np.zeros(len(uniq)), np.zeros(len(uniq))
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dz in (-1, 0, 1):
+                nb = uniq + (dx * dims[1] + dy) * dims[2] + dz
+                pos = np.clip(np.searchsorted(uniq, nb), 0, len(uniq) - 1)
+                hit = uniq[pos] == nb
+                total[hit] += sums[pos[hit]]
+                n[hit] += counts[pos[hit]]
+    return (total / np.maximum(n, 1.0))[inv]
 
 
 def _with_features(g, features: np.ndarray):
