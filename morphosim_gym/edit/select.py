@@ -66,19 +66,22 @@ class CandidateScorer(Protocol):
 
 
 class MaskAgreementScorer:
-    """IoU of each candidate's rendered selection (> 0.5) with the target's 2D map, averaged over
-    times, minus `consistency_weight` times the relative spread of the selected area over time."""
+    """Soft IoU (sum of minima over sum of maxima) of each candidate's rendered selection with the
+    target's 2D map, averaged over times, minus `consistency_weight` times the relative spread of
+    the selected area over time. Soft, so that a candidate is charged for every partial
+    contribution outside the target (a few Gaussians of the ground under an object) and for every
+    partial miss inside it."""
 
     def __init__(self, consistency_weight: float = 0.2) -> None:
         self.consistency_weight = consistency_weight
 
     def __call__(self, soft_maps: np.ndarray, target_maps: np.ndarray) -> np.ndarray:
-        sel = soft_maps > 0.5                                                  # [t, H, W, c]
-        tgt = target_maps[..., None]
-        inter = (sel & tgt).sum(axis=(1, 2))
-        union = (sel | tgt).sum(axis=(1, 2))
-        iou = np.where(union > 0, inter / np.maximum(union, 1), 1.0).mean(axis=0)
-        area = sel.sum(axis=(1, 2)).astype(np.float64)
+        soft = np.clip(soft_maps, 0.0, 1.0)                                    # [t, H, W, c]
+        tgt = target_maps[..., None].astype(soft.dtype)
+        inter = np.minimum(soft, tgt).sum(axis=(1, 2))
+        union = np.maximum(soft, tgt).sum(axis=(1, 2))
+        iou = np.where(union > 0, inter / np.maximum(union, 1e-9), 1.0).mean(axis=0)
+        area = soft.sum(axis=(1, 2)).astype(np.float64)
         spread = area.std(axis=0) / np.maximum(area.mean(axis=0), 1.0)
         return iou - self.consistency_weight * spread
 
