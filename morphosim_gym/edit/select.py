@@ -171,14 +171,15 @@ class Selector:
         # grazing angles, such as a roof, learn features blended with what lies behind them);
         # only Gaussians with some relevance of their own are raised, so neighbours that clearly
         # mean something else (the road under a bus) stay out
-        g = scene._at_shared(float(times[len(times) // 2])) if len(times) else scene.gaussians
+        states = [scene._at_shared(t) for t in times]                      # skinned once, used twice
+        g = states[len(states) // 2]
         near = neighbourhood_mean(g.means, rel, 3.0 * float(np.median(g.scales.max(axis=1))))
         grown = np.where(rel >= GROW_FLOOR, np.maximum(rel, near), rel)
         levels = [(t, rel) for t in self.thresholds] + [(t, grown) for t in self.thresholds]
         cands = np.stack([r >= t for t, r in levels], axis=1).astype(np.float32)         # [N, C]
         soft, target = [], []
-        for t in times:
-            out = render(_with_features(scene._at_shared(t), cands), scene.camera_at(t), backend=self.backend,
+        for t, state in zip(times, states):
+            out = render(_with_features(state, cands), scene.camera_at(t), backend=self.backend,
                          features=True, background=scene.background)
             soft.append(out.features / np.maximum(out.alpha[..., None], 1e-6))
             target.append(np.isin(out.instance, ids))

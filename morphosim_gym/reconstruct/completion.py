@@ -112,22 +112,28 @@ def _drop_seen(model: DynamicGaussians, clip: GeneratedClip, first: int, thresho
 def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int, sigmas: float = 3.0) -> np.ndarray:
     """[N - first] Gaussians from index `first` on whose camera depth in some input frame is within
     `sigmas` times their largest scale of the camera plane (in front of it or behind)."""
-    near = np.zeros(model.num - first, bool)
+    rows = np.stack([c.world_to_camera[2] for c in clip.cameras])            # [T, 4]: camera z of a point
     with torch.no_grad():
         reach = sigmas * model.scales()[first:].max(dim=1).values.numpy()
-        for t in range(clip.num_frames):
-            means, _ = model.warp(t)
-            cam = clip.cameras[t]
-            z = means[first:].numpy().astype(np.float64) @ cam.world_to_camera[2, :3] + cam.world_to_camera[2, 3]
-            near |= np.abs(z) < reach      # wholly behind the camera is fine: it is culled
-    return near
+        points = model.means[first:]
+        bound = model.bound[first:]
+        if not bound.any():                       # static (ground discs): the same place in every frame
+            z = points.numpy().astype(np.float64) @ rows[:, :3].T + rows[:, 3]         # [n, T]
+        else:
+            z = np.empty((len(points), len(rows)))
+            nodes, weights = model.skin_nodes[first:][bound], model.skin_weights[first:][bound]
+            for t in range(len(rows)):
+                world = points.clone()
+                world[bound] = model.points_at(points[bound], nodes, weights, t)
+                z[:, t] = world.numpy().astype(np.float64) @ rows[t, :3] + rows[t, 3]
+    return np.any(np.abs(z) < reach[:, None], axis=1)      # wholly behind the camera is fine: it is culled
 
 
 def _split_near(model: DynamicGaussians, clip: GeneratedClip, first: int, splits: int = 6) -> int:
     """Ground discs from index `first` on that come too close to an input camera (`_near_cameras`:
     their affine footprint would be wrong) are split into four discs of half the size, up to
     `splits` times; those still too close are dropped. Returns how many discs are left."""
-    for _ in range(splits + 1):
+    for round_ in range(splits + 1):
         near = _near_cameras(model, clip, first)
         if not near.any():
             break
@@ -143,7 +149,7 @@ def _split_near(model: DynamicGaussians, clip: GeneratedClip, first: int, splits
             axes = quat_to_rotmat(model.quats[idx]).numpy()        # columns: the disc's axes
         ids = model.object_ids[idx].numpy()
         _subset(model, keep)
-        if _ == splits:
+        if round_ == splits:                      # the last round only drops
             break
         quarter = scales[:, :1] / 0.8 / 4.0                         # a quarter of the cell side
         children = [means + (a * axes[:, :, 0] + b * axes[:, :, 1]) * quarter

@@ -29,6 +29,7 @@ from ..errors import BackendUnavailableError
 from ..scene import Camera
 from .camera import camera_from_viewer, render_size, viewer_view
 from .session import Snapshot, ViewerSession, format_log, md_escape, resize_keep_fov
+from .lifecycle import ServedViewer
 from .worker import FrameWorker
 
 __all__ = ["SceneViewer", "FrameInfo", "import_viser", "PIP_HINT"]
@@ -70,7 +71,7 @@ class FrameInfo:
     sent_at: float
 
 
-class SceneViewer:
+class SceneViewer(ServedViewer):
     """Serve a session in the browser.
 
     Args:
@@ -107,7 +108,7 @@ class SceneViewer:
         self._command_lock = threading.Lock()
         self._pending: Optional[dict] = None
         self._pending_lock = threading.Lock()
-        self._closed = threading.Event()
+        super().__init__()
         self._object_boxes: list[Any] = []
         self._object_key: tuple = ()
 
@@ -144,22 +145,6 @@ class SceneViewer:
         self._frames.stop()
         self._player.join(timeout=2.0)
         self.server.stop()
-
-    def __enter__(self) -> "SceneViewer":
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-    def serve_forever(self) -> None:
-        """Block until Ctrl-C, then close."""
-        try:
-            while not self._closed.wait(0.5):
-                pass
-        except KeyboardInterrupt:
-            pass
-        finally:
-            self.close()
 
     @property
     def status(self) -> str:

@@ -27,6 +27,7 @@ import numpy as np
 from ..scene import Camera, Gaussians
 from .camera import camera_from_viewer, render_size, viewer_pose, viewer_view
 from .session import md_escape
+from .lifecycle import ServedViewer
 from .worker import FrameWorker
 
 __all__ = ["EnvViewer", "EnvRunner", "StepRecord", "make_policy", "POLICIES"]
@@ -258,7 +259,7 @@ def _fmt(v: Any) -> str:
     return md_escape(str(v))
 
 
-class EnvViewer:
+class EnvViewer(ServedViewer):
     """Serve an env's episodes in the browser.
 
     Args:
@@ -285,7 +286,7 @@ class EnvViewer:
         self.jpeg_quality = int(jpeg_quality)
         self.max_episodes = int(episodes)
         self.frames: dict[int, dict] = {}
-        self._closed = threading.Event()
+        super().__init__()
         self.server = viser.ViserServer(host=host, port=int(port), verbose=verbose)
         self.server.scene.set_up_direction("+z")
         self.server.scene.world_axes.visible = False
@@ -314,21 +315,6 @@ class EnvViewer:
         self._frames.stop()
         self.server.stop()
         self.runner.close()
-
-    def __enter__(self) -> "EnvViewer":
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-    def serve_forever(self) -> None:
-        try:
-            while not self._closed.wait(0.5):
-                pass
-        except KeyboardInterrupt:
-            pass
-        finally:
-            self.close()
 
     def wait_idle(self, timeout: float = 10.0) -> bool:
         return self._frames.wait_idle(timeout)
