@@ -109,37 +109,50 @@ def _drop_seen(model: DynamicGaussians, clip: GeneratedClip, first: int, thresho
     return model.num - first
 
 
-def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int, sigmas: float = 3.0) -> np.ndarray:
-    """[N - first] Gaussians from index `first` on whose camera depth in some input frame is within
-    `sigmas` times their largest scale of the camera plane (in front of it or behind)."""
-    rows = np.stack([c.world_to_camera[2] for c in clip.cameras])            # [T, 4]: camera z of a point
+def _near_cameras(model: DynamicGaussians, clip: GeneratedClip, first: int,
+                  sigmas: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """For the Gaussians from index `first` on: (near [n], in_view [n]). `near`: the camera depth
+    in some input frame is within `sigmas` times the largest scale of the camera plane (in front
+    of it or behind: the affine footprint would be wrong); `in_view`: in one of those frames, the
+    Gaussian (grown by the same reach) overlaps the view frustum."""
+    cams = clip.cameras
+    rot = np.stack([c.world_to_camera[:3, :3] for c in cams])                 # [T, 3, 3]
+    off = np.stack([c.world_to_camera[:3, 3] for c in cams])                  # [T, 3]
+    half = np.array([[0.5 * c.width / c.fx, 0.5 * c.height / c.fy] for c in cams])   # [T, 2] tan of half fov
     with torch.no_grad():
-        reach = sigmas * model.scales()[first:].max(dim=1).values.numpy()
+        reach = sigmas * model.scales()[first:].max(dim=1).values.numpy().astype(np.float64)
         points = model.means[first:]
         bound = model.bound[first:]
         if not bound.any():                       # static (ground discs): the same place in every frame
-            z = points.numpy().astype(np.float64) @ rows[:, :3].T + rows[:, 3]         # [n, T]
+            pc = np.einsum("tij,nj->nti", rot, points.numpy().astype(np.float64)) + off[None]
         else:
-            z = np.empty((len(points), len(rows)))
+            pc = np.empty((len(points), len(cams), 3))
             nodes, weights = model.skin_nodes[first:][bound], model.skin_weights[first:][bound]
-            for t in range(len(rows)):
+            for t in range(len(cams)):
                 world = points.clone()
                 world[bound] = model.points_at(points[bound], nodes, weights, t)
-                z[:, t] = world.numpy().astype(np.float64) @ rows[t, :3] + rows[t, 3]
-    return np.any(np.abs(z) < reach[:, None], axis=1)      # wholly behind the camera is fine: it is culled
+                pc[:, t] = world.numpy().astype(np.float64) @ rot[t].T + off[t]
+    r = reach[:, None]
+    near = np.abs(pc[..., 2]) < r                                             # [n, T]
+    lateral = np.abs(pc[..., :2]) - r[..., None] <= (pc[..., 2:3] + r[..., None]) * half[None]
+    in_view = near & lateral.all(axis=-1)
+    return near.any(axis=1), in_view.any(axis=1)
 
 
 def _split_near(model: DynamicGaussians, clip: GeneratedClip, first: int, splits: int = 6) -> int:
-    """Ground discs from index `first` on that come too close to an input camera (`_near_cameras`:
-    their affine footprint would be wrong) are split into four discs of half the size, up to
-    `splits` times; those still too close are dropped. Returns how many discs are left."""
+    """Ground discs from index `first` on that come too close to an input camera (`_near_cameras`)
+    inside its view are split into four discs of half the size, up to `splits` times; those still
+    too close, and those near a camera but beside or behind its view (never seen there, and
+    splitting them along the camera plane would multiply them for nothing), are dropped.
+    Returns how many discs are left."""
     for round_ in range(splits + 1):
-        near = _near_cameras(model, clip, first)
+        near, in_view = _near_cameras(model, clip, first)
         if not near.any():
             break
-        idx = first + np.flatnonzero(near)
+        split = in_view if round_ < splits else np.zeros_like(in_view)    # the last round only drops
+        idx = first + np.flatnonzero(split)
         keep = np.ones(model.num, bool)
-        keep[idx] = False
+        keep[first + np.flatnonzero(near)] = False
         with torch.no_grad():
             means = model.means[idx].numpy().astype(np.float64)
             quats = model.quats[idx].numpy()
@@ -149,8 +162,8 @@ def _split_near(model: DynamicGaussians, clip: GeneratedClip, first: int, splits
             axes = quat_to_rotmat(model.quats[idx]).numpy()        # columns: the disc's axes
         ids = model.object_ids[idx].numpy()
         _subset(model, keep)
-        if round_ == splits:                      # the last round only drops
-            break
+        if not len(idx):
+            continue
         quarter = scales[:, :1] / 0.8 / 4.0                         # a quarter of the cell side
         children = [means + (a * axes[:, :, 0] + b * axes[:, :, 1]) * quarter
                     for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
@@ -206,20 +219,46 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(n, e1)
     uv = np.c_[means[ground] @ e1, means[ground] @ e2]
-    cell = float(np.median(scales[ground, :2])) * 3.0
     lo, hi = uv.min(0), uv.max(0)
     extent = hi - lo
     lo, hi = lo - spread * extent, hi + spread * extent
-    cell = max(cell, float((hi - lo).max()) / 2048.0)      # bound the fine grid
-    size = np.ceil((hi - lo) / cell).astype(int)
-    # fine cells covered by what was observed: every static Gaussian over its footprint (far
-    # ground has large ones; things standing on the ground cover the ground under them)
     static = np.flatnonzero(np.isin(ids, static_ids) & (opac > 0.1))
-    occupied = np.zeros(tuple(size[::-1]), bool)
     ouv = np.c_[means[static] @ e1, means[static] @ e2]
+    # the finest cell follows the observed ground's Gaussians; where the rings would need more
+    # than `max_new` discs (a densified fit has small ones, and the sparse far ground leaves
+    # many gaps) the cells grow, so that the outer rings still reach `spread` extents out
+    cell = max(float(np.median(scales[ground, :2])) * 3.0, float((hi - lo).max()) / 2048.0)
+    for _ in range(8):
+        pts, src, side = _ring_cells(uv, ouv, scales[static, :2].max(1), lo, hi, cell, levels, rng)
+        if len(pts) <= max_new:
+            break
+        cell *= 1.5
+    pts = pts[:, :1] * e1 + pts[:, 1:] * e2 + d * n
+    src = ground[src]
+    if len(pts) > max_new:                                   # keep the inner rings, drop the farthest
+        order = np.argsort(side, kind="stable")[:max_new]
+        pts, src, side = pts[order], src[order], side[order]
+    k = len(pts)
+    if k == 0:
+        return 0
+    quats = np.tile(_quat_from_normal(n), (k, 1))
+    sc = np.c_[side * 0.8, side * 0.8, side * 0.15]
+    jitter = 1.0 + 0.04 * rng.standard_normal((k, 1))
+    _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors[src] * jitter, 0, 1), np.full(k, label))
+    return k
+
+
+def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell: float,
+                levels: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Plane coordinates [k, 2], source ground index [k] and side [k] of the discs that tile the
+    empty plane in `[lo, hi]` around the observed ground `uv` in rings of growing cells (`cell`
+    wide next to what was seen); `ouv`/`oscale`: every observed static Gaussian, which covers
+    the ground under it over its footprint."""
+    size = np.ceil((hi - lo) / cell).astype(int)
+    occupied = np.zeros(tuple(size[::-1]), bool)
     ocells = np.floor((ouv - lo) / cell).astype(int)
     inside = np.all((ocells >= 0) & (ocells < size), axis=1)
-    ocells, oscale = ocells[inside], scales[static[inside], :2].max(1)
+    ocells, oscale = ocells[inside], oscale[inside]
     reach = np.minimum(np.floor(oscale / cell).astype(int), 16)
     for r in np.unique(reach):
         sel = reach == r
@@ -228,19 +267,19 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
                 occupied[np.clip(ocells[sel, 1] + dy, 0, size[1] - 1), np.clip(ocells[sel, 0] + dx, 0, size[0] - 1)] = True
     empty = (~occupied).astype(np.uint8)
     if empty.sum() == 0:
-        return 0
+        return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0)
     dist = cv2.distanceTransform(empty, cv2.DIST_L2, 5)
     # colour of an added cell: the nearest observed ground Gaussian's
     grid = np.full(tuple(size[::-1]), -1, np.int64)
-    cells = np.floor((uv - lo) / cell).astype(int)
-    grid[cells[:, 1], cells[:, 0]] = np.arange(len(ground))
+    cells = np.clip(np.floor((uv - lo) / cell).astype(int), 0, size - 1)
+    grid[cells[:, 1], cells[:, 0]] = np.arange(len(uv))
     no_ground = (grid < 0).astype(np.uint8)
     _, labels = cv2.distanceTransformWithLabels(no_ground, cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL)
     zero_rows, zero_cols = np.nonzero(no_ground == 0)
     label_to_gauss = np.full(labels.max() + 1, -1, np.int64)
     label_to_gauss[labels[zero_rows, zero_cols]] = grid[zero_rows, zero_cols]
-    # rings of growing cells: level L (cells 2^L fine cells wide) fills the empty cells whose
-    # distance to the observed ground (in fine cells) is in [2^(L+1) - 2, 2^(L+2) - 2)
+    # level L (cells 2^L fine cells wide) fills the empty cells whose distance to the observed
+    # ground (in fine cells) is in [2^(L+1) - 2, 2^(L+2) - 2)
     pts_all, src_all, size_all = [], [], []
     for level in range(levels):
         step = 2 ** level
@@ -257,21 +296,10 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
         side = cell * step
         pu = lo[0] + (c + 0.5 + 0.3 * (rng.random(len(c)) - 0.5)) * side
         pv = lo[1] + (r + 0.5 + 0.3 * (rng.random(len(r)) - 0.5)) * side
-        pts_all.append(pu[:, None] * e1 + pv[:, None] * e2 + d * n)
-        src_all.append(ground[src[ok]])
+        pts_all.append(np.c_[pu, pv])
+        src_all.append(src[ok])
         size_all.append(np.full(len(c), side))
-    pts, src, side = np.concatenate(pts_all), np.concatenate(src_all), np.concatenate(size_all)
-    if len(pts) > max_new:                                   # keep the inner rings, drop the farthest
-        order = np.argsort(side, kind="stable")[:max_new]
-        pts, src, side = pts[order], src[order], side[order]
-    k = len(pts)
-    if k == 0:
-        return 0
-    quats = np.tile(_quat_from_normal(n), (k, 1))
-    sc = np.c_[side * 0.8, side * 0.8, side * 0.15]
-    jitter = 1.0 + 0.04 * rng.standard_normal((k, 1))
-    _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors[src] * jitter, 0, 1), np.full(k, label))
-    return k
+    return np.concatenate(pts_all), np.concatenate(src_all), np.concatenate(size_all)
 
 
 def _quat_from_normal(n: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from tqdm.auto import tqdm
 
 from ..render import rasterize
 from ..scene import GeneratedClip
-from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_loss, photometric_loss, psnr_torch,
+from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_iou_loss, mask_loss, photometric_loss, psnr_torch,
                      smooth_motion_loss, track_loss)
 from .model import DynamicGaussians, rbf_skinning
 from .strategy import Strategy, accumulate, initialize_state, refine
@@ -29,7 +29,7 @@ class FitConfig:
         lr_scales, lr_quats, lr_opacity, lr_colors: per-Gaussian learning rates.
         lr_node_trans: node translation learning rate, times the median scene depth.
         lr_node_quats: node rotation learning rate.
-        w_ssim, w_depth, w_mask, w_empty, w_track, w_arap, w_smooth: loss weights.
+        w_ssim, w_depth, w_mask, w_mask_iou, w_empty, w_track, w_arap, w_smooth: loss weights.
         strategy: densification and pruning.
         backend: renderer ("cpu").
         progress: show a tqdm bar.
@@ -46,6 +46,7 @@ class FitConfig:
     w_ssim: float = 0.2
     w_depth: float = 0.1
     w_mask: float = 0.2
+    w_mask_iou: float = 0.1
     w_empty: float = 0.2
     w_track: float = 0.05
     w_arap: float = 1.0
@@ -194,7 +195,10 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         target = data.rgb[t]
         loss = photometric_loss(rgb, target, cfg.w_ssim)
         loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha)
-        loss = loss + cfg.w_mask * mask_loss(soft, data.onehot(t), data.mask_valid[t])
+        onehot_t = data.onehot(t)
+        loss = loss + cfg.w_mask * mask_loss(soft, onehot_t, data.mask_valid[t])
+        if cfg.w_mask_iou > 0:
+            loss = loss + cfg.w_mask_iou * mask_iou_loss(soft, onehot_t, data.mask_valid[t])
         loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
         # depth but no instance: translucent matter, drawn but thinner than the background behind it
         loss = loss + cfg.w_empty * empty_alpha_loss(torch.relu(alpha - 0.5), ~data.mask_valid[t])

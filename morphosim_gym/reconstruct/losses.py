@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "mask_loss", "empty_alpha_loss", "track_loss",
+__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
            "arap_loss", "smooth_motion_loss", "psnr_torch"]
 
 _WINDOWS: dict[tuple, torch.Tensor] = {}
@@ -60,6 +60,23 @@ def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tens
     if not valid.any():
         return soft.sum() * 0.0
     return err[valid].mean()
+
+
+def mask_iou_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
+    """1 - soft IoU (sum of minima over sum of maxima) of each instance's rendered map [H, W, K]
+    with its mask [H, W, K], averaged over the instances present in the frame. Every instance
+    weighs the same whatever its area, so the outline of a small object counts as much as the
+    ground's (a pixel-mean loss barely sees it)."""
+    if valid is not None:
+        keep = valid[..., None].to(soft.dtype)
+        soft, target_onehot = soft * keep, target_onehot * keep
+    present = target_onehot.sum(dim=(0, 1)) > 0
+    if not present.any():
+        return soft.sum() * 0.0
+    s, t = soft.clamp(0.0, 1.0)[..., present], target_onehot[..., present]
+    inter = torch.minimum(s, t).sum(dim=(0, 1))
+    union = torch.maximum(s, t).sum(dim=(0, 1)).clamp(min=1e-6)
+    return (1.0 - inter / union).mean()
 
 
 def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:
