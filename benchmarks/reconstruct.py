@@ -40,6 +40,13 @@ def measure(sim: ms.MorphoSim, prompt: str, seed: int) -> dict:
     seconds = time.perf_counter() - start
     report = quality_report(clip, scene, seconds=seconds)
     report["prompt"] = prompt
+    log = getattr(scene, "_fit_log", None)          # set by a real fit (not by a cache hit)
+    if log:
+        fit_log = log["fit"]
+        report["stage_seconds"] = {"fit": fit_log["seconds"],
+                                   "completion": fit_log.get("completion", {}).get("seconds", 0.0),
+                                   "polish": fit_log.get("complete", {}).get("seconds", 0.0),
+                                   "features": log["features"]["seconds"]}
     return report
 
 

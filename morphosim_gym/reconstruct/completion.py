@@ -4,7 +4,8 @@ Two documented priors (heuristics, not learned):
 * ground: a plane is fitted (RANSAC) to the static Gaussians that face up; the empty plane
   around the observed ground is tiled with flat Gaussians in rings of growing size (fine next to
   what was seen, coarse far away), each coloured like the nearest observed cell (the ground
-  continues beyond and behind what the camera saw);
+  continues beyond and behind what the camera saw); all cells grow when the rings would need
+  more than `max_ground` discs, so the ground always reaches as far out;
 * symmetry: each object's visible side is mirrored across the vertical plane through its
   centre that faces the camera it was seen from, wherever that leaves empty space (objects
   are assumed left/right symmetric in depth: their far side looks like their near side).
@@ -369,6 +370,8 @@ def _complete_symmetry(model: DynamicGaussians, clip: GeneratedClip, dynamic: di
 def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: int = 0,
              reference: dict | None = None, max_ground: int = 12000) -> dict[str, int]:
     """Add ground and far-side Gaussians to a fitted model (in place); returns how many of each.
+    `max_ground` bounds the ground discs of the rings (splitting those too close to a camera can
+    add a few).
 
     Ground cells also fill the gaps that the input views see between observed Gaussians (far
     ground seen at a grazing angle is sparse in 3D), so a short fit should follow to blend them

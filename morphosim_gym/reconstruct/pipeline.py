@@ -128,7 +128,9 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
     if cfg.complete:
         from .completion import complete
 
-        complete(model, clip, init.dynamic, seed=cfg.seed, reference=init.reference)
+        t_complete = time.perf_counter()
+        fit_log["completion"] = complete(model, clip, init.dynamic, seed=cfg.seed, reference=init.reference)
+        fit_log["completion"]["seconds"] = time.perf_counter() - t_complete
         if cfg.complete_iterations > 0:
             # no densification in this short pass: only blend in what completion added
             polish = replace(fit_cfg, iterations=cfg.complete_iterations,
