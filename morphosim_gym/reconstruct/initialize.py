@@ -1,8 +1,9 @@
 """Initialise the 4D model from a clip: static background and dynamic instances, scaffold nodes.
 
 * every instance of the masks is lifted with the depth prior; an instance whose lifted
-  tracks move rigidly by more than `motion_threshold` (fraction of the scene depth) is
-  dynamic, the others are static;
+  tracks move rigidly by more than `motion_threshold` (fraction of the scene depth), and
+  whose tracks a static hypothesis misplaces by more than `static_pixels`, is dynamic, the
+  others are static;
 * pixels with a depth but no instance (translucent matter) are lifted into the static
   setting instance (`unlabelled_host`);
 * static instances are fused from several frames into one point set (a voxel per pixel
@@ -20,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import GeneratedClip
-from .lifting import PointSet, backproject, instance_motion, voxel_downsample
+from .lifting import PointSet, backproject, instance_motion, interior_mask, static_residual, voxel_downsample
 from .model import DynamicGaussians
 
 __all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
@@ -33,7 +34,10 @@ class InitConfig:
     Attributes:
         frame_stride: lift every n-th frame (plus each dynamic instance's reference frame).
         motion_threshold: an instance is dynamic if it moves more than this fraction of the
-            median scene depth over the clip.
+            median scene depth over the clip ...
+        static_pixels: ... and "it does not move" misplaces its tracks by more than this many
+            pixels in some frame (`static_residual`; with a moving camera, a depth prior a few
+            percent off makes static things seem to move in 3D, not in the image).
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -43,6 +47,7 @@ class InitConfig:
 
     frame_stride: int = 6
     motion_threshold: float = 0.01
+    static_pixels: float = 2.0
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -78,6 +83,24 @@ def _disc_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     from ..generate.parts import _normal_quats
 
     return _normal_quats(normals, rng)
+
+
+def _covered(clip: GeneratedClip, frame: int, points: np.ndarray, tolerance: float = 0.05) -> np.ndarray:
+    """[H, W] pixels of a frame onto which some of `points` project at the depth prior's depth
+    (within `tolerance` of it): already explained by those points."""
+    H, W = clip.height, clip.width
+    out = np.zeros((H, W), bool)
+    if len(points) == 0:
+        return out
+    uv, z = clip.cameras[frame].project(points)
+    with np.errstate(invalid="ignore"):
+        c, r = np.floor(uv[:, 0]), np.floor(uv[:, 1])
+        ok = (z > clip.cameras[frame].near) & (c >= 0) & (c < W) & (r >= 0) & (r < H)
+    c, r, z = c[ok].astype(int), r[ok].astype(int), z[ok]
+    prior = clip.depth[frame, r, c]
+    hit = np.abs(prior - z) <= tolerance * prior
+    out[r[hit], c[hit]] = True
+    return out
 
 
 def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
@@ -119,18 +142,24 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
         pts = backproject(clip, ref, select=sel)
         centre = pts.points.mean(0) if len(pts) else np.zeros(3)
         travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
-        dynamic[inst] = bool(travel > cfg.motion_threshold * scene_depth and good.sum() >= 2)
+        dynamic[inst] = bool(travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
+                             and static_residual(clip, inst, ref) > cfg.static_pixels)
         reference[inst] = ref
         poses[inst] = (rots, trans)
 
     static_sets, dyn_sets = [], {}
     host = unlabelled_host(clip, [i for i in ids if not dynamic[i]])
+    static_ids = [i for i in ids if not dynamic[i]]
     for t in frames:
-        ps = backproject(clip, t)
+        select = interior_mask(clip.masks[t], clip.depth[t])
+        if static_sets:
+            # a moving camera sees the same static surfaces again from elsewhere: lift only the
+            # pixels that the points lifted so far do not already cover in this frame
+            select &= ~_covered(clip, t, PointSet.concat(static_sets).points)
+        ps = backproject(clip, t, select=select)
         if host is not None:
             ps.ids = np.where(ps.ids < 0, host, ps.ids)
-        static = np.isin(ps.ids, [i for i in ids if not dynamic[i]])
-        static_sets.append(ps.subset(static))
+        static_sets.append(ps.subset(np.isin(ps.ids, static_ids)))
     for inst in ids:
         if not dynamic[inst]:
             continue

@@ -134,6 +134,55 @@ def _lift_tracks(clip: GeneratedClip, frame: int, uv: np.ndarray) -> tuple[np.nd
     return clip.cameras[frame].unproject(uv, z), z > 0
 
 
+def instance_tracks(clip: GeneratedClip, instance: int) -> np.ndarray:
+    """Indices of the 2D tracks that belong to an instance: those landing on its mask in more
+    than 80% of the frames where they are visible."""
+    tr, vis = clip.tracks, clip.track_visible
+    own = np.zeros(len(tr), bool)
+    for p in range(len(tr)):
+        frames = np.flatnonzero(vis[p])
+        if len(frames) == 0:
+            continue
+        uv = tr[p, frames]
+        c = np.clip(np.floor(uv[:, 0]).astype(int), 0, clip.width - 1)
+        r = np.clip(np.floor(uv[:, 1]).astype(int), 0, clip.height - 1)
+        own[p] = (clip.masks[frames, r, c] == instance).mean() > 0.8
+    return np.flatnonzero(own)
+
+
+def static_residual(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
+                    scales: np.ndarray = np.linspace(0.85, 1.15, 31)) -> float:
+    """How badly "this instance does not move" explains its tracks, in pixels: the instance's
+    tracks are lifted by depth in the reference frame and projected into every other frame with
+    that frame's camera; the result is the largest per-frame median distance to the tracked
+    positions, minimised over one global depth scale (a depth prior off by a few percent makes
+    a static object seem to slide as the camera moves; with a fixed camera the scale does not
+    matter). 0 when too few tracks are seen."""
+    if clip.tracks is None:
+        return 0.0
+    idx = instance_tracks(clip, instance)
+    idx = idx[clip.track_visible[idx, reference]]
+    if len(idx) < min_tracks:
+        return 0.0
+    cam_ref = clip.cameras[reference]
+    src, ok = _lift_tracks(clip, reference, clip.tracks[idx, reference])
+    rays = src - cam_ref.position
+    best = np.inf
+    for s in scales:
+        worst = 0.0
+        pts = cam_ref.position + s * rays
+        for t in range(clip.num_frames):
+            use = clip.track_visible[idx, t] & ok
+            if t == reference or use.sum() < min_tracks:
+                continue
+            uv, _ = clip.cameras[t].project(pts[use])
+            worst = max(worst, float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
+            if worst >= best:
+                break
+        best = min(best, worst)
+    return float(best)
+
+
 def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
                     robust_iters: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per-frame rigid poses of one instance relative to a reference frame, from its 2D tracks
@@ -149,18 +198,8 @@ def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_trac
         return rots, trans, good
     tr = clip.tracks
     vis = clip.track_visible
-    # the tracks that belong to this instance: those landing on its mask where visible
-    own = np.zeros(len(tr), bool)
-    for p in range(len(tr)):
-        frames = np.flatnonzero(vis[p])
-        if len(frames) == 0:
-            continue
-        uv = tr[p, frames]
-        c = np.clip(np.floor(uv[:, 0]).astype(int), 0, clip.width - 1)
-        r = np.clip(np.floor(uv[:, 1]).astype(int), 0, clip.height - 1)
-        hits = clip.masks[frames, r, c] == instance
-        own[p] = hits.mean() > 0.8
-    idx = np.flatnonzero(own & vis[:, reference])
+    idx = instance_tracks(clip, instance)
+    idx = idx[vis[idx, reference]]
     if len(idx) < min_tracks:
         return rots, trans, good
     src, ok_src = _lift_tracks(clip, reference, tr[idx, reference])
