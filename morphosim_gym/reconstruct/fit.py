@@ -18,6 +18,8 @@ from .strategy import Strategy, accumulate, initialize_state, refine
 
 __all__ = ["FitConfig", "fit", "ClipTensors"]
 
+_DECAYED = ("means", "node_trans", "node_quats")    # parameter groups whose learning rate decays
+
 
 @dataclass(frozen=True)
 class FitConfig:
@@ -30,6 +32,10 @@ class FitConfig:
         lr_node_trans: node translation learning rate, times the median scene depth.
         lr_node_quats: node rotation learning rate.
         w_ssim, w_depth, w_mask, w_mask_iou, w_empty, w_track, w_arap, w_smooth: loss weights.
+        lr_decay: the position and node-pose learning rates decay exponentially to this fraction
+            of their start by the last iteration. Adam takes steps of about the learning rate
+            whatever the gradient, so at a constant rate each frame's node pose keeps jittering
+            by a fraction of a pixel around its optimum; the decay lets it settle.
         strategy: densification and pruning.
         backend: renderer ("cpu").
         progress: show a tqdm bar.
@@ -51,9 +57,16 @@ class FitConfig:
     w_track: float = 0.05
     w_arap: float = 1.0
     w_smooth: float = 1.0
+    lr_decay: float = 0.03
     strategy: Strategy = field(default_factory=Strategy)
     backend: str = "cpu"
     progress: bool = True
+
+    def __post_init__(self) -> None:
+        if self.iterations < 1:
+            raise ValueError(f"Expected at least 1 fit iteration, found {self.iterations}")
+        if not 0.0 < self.lr_decay <= 1.0:
+            raise ValueError(f"Expected lr_decay in (0, 1], found {self.lr_decay}")
 
 
 class ClipTensors:
@@ -183,7 +196,12 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
     start = time.perf_counter()
     frames = []
     bar = tqdm(range(cfg.iterations), desc="reconstruct", disable=not cfg.progress, leave=False)
+    start_lr = {g["name"]: g["lr"] for g in optimizer.param_groups}
     for it in bar:
+        decay = cfg.lr_decay ** (it / max(cfg.iterations - 1, 1))
+        for g in optimizer.param_groups:
+            if g["name"] in _DECAYED:
+                g["lr"] = start_lr[g["name"]] * decay
         if not frames:
             frames = list(order_rng.permutation(data.T))
         t = int(frames.pop())
