@@ -26,7 +26,7 @@ from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, build_parts
 from .parts import SurfaceCloud, match_mean_color, parts_to_gaussians
-from .settings import Setting, build_setting, setting_levels
+from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
 __all__ = ["GenerationConfig", "ComposedScene", "compose_scene", "camera_path"]
@@ -381,10 +381,9 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
         parts["ids"].append(np.full(len(means), obj_id))
         parts["nodes"].append(np.full(len(means), node))
 
-    s = setting.cloud
-    add(s, s.means, s.quats, 0, -1)
     rotations = np.zeros((T, len(instances), 4))
     translations = np.zeros((T, len(instances), 3))
+    placed = []
     for k, inst in enumerate(instances):
         obj_id = k + 1
         objects.append(SceneObject(obj_id, inst.name, inst.category, color=inst.asked_color,
@@ -418,6 +417,15 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
         rel_q = matrix_to_quat(rel_mats)
         rotations[:, k] = rel_q
         translations[:, k] = world_origin - np.einsum("tij,j->ti", rel_mats, world_origin[0])
+        placed.append((c, means0, quats0, obj_id, k, traj is None))
+    # the setting, less what a resting object's base hides for the whole clip
+    s = setting.cloud
+    for c, means0, _, _, _, static in placed:
+        if static and len(c):
+            spacing = float(np.median(c.scales[:, :2])) / 0.62      # parts_to_gaussians: 0.62 spacing
+            s = carve_under(s, means0[means0[:, 2] <= means0[:, 2].min() + spacing], spacing)
+    add(s, s.means, s.quats, 0, -1)
+    for c, means0, quats0, obj_id, k, _ in placed:
         add(c, means0, quats0, obj_id, k)
     g = Gaussians(means=np.concatenate(parts["means"]), quats=np.concatenate(parts["quats"]),
                   scales=np.concatenate(parts["scales"]), opacities=np.concatenate(parts["opacities"]),

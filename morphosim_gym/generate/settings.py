@@ -19,7 +19,7 @@ from typing import Sequence
 from ..scene import Camera
 from .parts import AMBIENT, DIFFUSE, LIGHT_DIR, SurfaceCloud, _normal_quats
 
-__all__ = ["Setting", "SETTING_NAMES", "build_setting", "setting_levels"]
+__all__ = ["Setting", "SETTING_NAMES", "build_setting", "setting_levels", "carve_under"]
 
 SETTING_NAMES = ("ground", "grass", "road", "snow", "sand", "water", "underwater", "table", "indoor", "sky")
 
@@ -240,3 +240,99 @@ def build_setting(name: str, radius: float, rng: np.random.Generator, budget: in
     clouds = _flat(c, np.full(n, radius * 0.03), np.tile([0.97, 0.97, 0.99], (n, 1)), rng, normal=(0.0, -1.0, 0.0),
                    opacity=0.55, shade=False)
     return Setting(name, clouds, (0.45, 0.65, 0.92), air_height=setting_levels(name)["air_height"], label="sky")
+
+
+def carve_under(cloud: SurfaceCloud, base: np.ndarray, spacing: float) -> SurfaceCloud:
+    """The setting with a resting object's footprint carved out.
+
+    `base` [m, 3] are the object's lowest surface points in world coordinates, about `spacing`
+    metres apart; only setting Gaussians at that height are touched. The renderer orders Gaussians by the depth of their centres, so a large flat
+    setting Gaussian whose disc reaches under the object, with its centre in front of the
+    object's own Gaussians, draws the ground through the object (a table showing through a
+    plate at a low view). Setting Gaussians the base covers entirely are dropped; those whose
+    disc (two standard deviations) reaches under it are replaced by small ones of the same
+    colour on a grid `1.5 spacing` apart, less those under the base.
+    """
+    if len(base) == 0 or spacing <= 0:
+        return cloud
+    cell = 2.0 * spacing
+    lo = base[:, :2].min(axis=0) - 2 * cell
+    ij = np.floor((base[:, :2] - lo) / cell).astype(np.int64)
+    shape = np.asarray(ij.max(axis=0) + 3)
+    occupied = np.zeros(tuple(shape), bool)
+    occupied[ij[:, 0], ij[:, 1]] = True
+    # close one-cell gaps of the sampling; `inner`: cells whose four neighbours are occupied too
+    # (a rim cell is partly outside the base)
+    closed = occupied.copy()
+    closed[1:-1, 1:-1] |= (occupied[:-2, 1:-1] & occupied[2:, 1:-1]) | (occupied[1:-1, :-2] & occupied[1:-1, 2:])
+    inner = np.zeros_like(closed)
+    inner[1:-1, 1:-1] = (closed[1:-1, 1:-1] & closed[:-2, 1:-1] & closed[2:, 1:-1]
+                         & closed[1:-1, :-2] & closed[1:-1, 2:])
+
+    def lookup(grid: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        k = np.floor((xy - lo) / cell).astype(np.int64)
+        inside = np.all((k >= 0) & (k < shape), axis=1)
+        out = np.zeros(len(xy), bool)
+        out[inside] = grid[k[inside, 0], k[inside, 1]]
+        return out
+
+    # setting Gaussians at the height of the base (an object hovering above the ground hides nothing)
+    z = cloud.means[:, 2]
+    low = np.flatnonzero((z <= base[:, 2].max()) & (z >= base[:, 2].min() - 2.0 * spacing))
+    reach = 2.0 * cloud.scales[low, :2].max(axis=1)
+    angles = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+    directions = np.r_[np.zeros((1, 2)), np.c_[np.cos(angles), np.sin(angles)]]
+    covered = np.ones(len(low), bool)
+    touches = np.zeros(len(low), bool)
+    for d in directions:
+        xy = cloud.means[low, :2] + reach[:, None] * d
+        covered &= lookup(inner, xy)
+        touches |= lookup(closed, xy)
+    drop = np.zeros(len(cloud.means), bool)
+    drop[low[touches]] = True
+    # the small Gaussians that replace the parents reaching under the base: one grid `step` apart
+    # shared by all parents, each point coloured by the parents' weights there
+    step = 1.5 * spacing
+    keys, parent, weight = [], [], []
+    for j in low[touches & ~covered]:
+        sigma = float(cloud.scales[j, :2].max())
+        half = 1.5 * sigma
+        k0 = np.floor((cloud.means[j, :2] - half - lo) / step).astype(np.int64)
+        k1 = np.floor((cloud.means[j, :2] + half - lo) / step).astype(np.int64)
+        g = np.stack(np.meshgrid(np.arange(k0[0], k1[0] + 1), np.arange(k0[1], k1[1] + 1), indexing="ij"),
+                     -1).reshape(-1, 2)
+        d2 = (((g + 0.5) * step + lo - cloud.means[j, :2]) ** 2).sum(axis=1)
+        near = d2 <= half * half
+        keys.append(g[near])
+        parent.append(np.full(int(near.sum()), j))
+        weight.append(np.exp(-0.5 * d2[near] / (sigma * sigma)))
+    keep = ~drop
+    if not keys:
+        return _subset(cloud, keep)
+    keys, parent, weight = np.concatenate(keys), np.concatenate(parent), np.concatenate(weight)
+    uniq, inv = np.unique(keys, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    total = np.bincount(inv, weights=weight, minlength=len(uniq))
+
+    def blend(values: np.ndarray) -> np.ndarray:
+        return np.stack([np.bincount(inv, weights=weight * values[parent, c], minlength=len(uniq))
+                         for c in range(values.shape[1])], axis=1) / total[:, None]
+
+    xy = (uniq + 0.5) * step + lo
+    under = lookup(inner, xy)
+    # the strongest parent gives a point its orientation
+    order = np.lexsort((-weight, inv))
+    first = order[np.r_[0, np.flatnonzero(np.diff(inv[order])) + 1]]
+    strongest = parent[first]
+    tang = 0.85 * step
+    ratio = cloud.scales[:, 2] / np.maximum(cloud.scales[:, :2].max(axis=1), 1e-12)
+    n = len(uniq)
+    children = SurfaceCloud(np.c_[xy, blend(cloud.means[:, 2:3])[:, 0]], cloud.quats[strongest],
+                            np.c_[np.full((n, 2), tang), tang * blend(ratio[:, None])], blend(cloud.opacities[:, None])[:, 0],
+                            blend(cloud.colors), cloud.nodes[strongest], cloud.node_names)
+    return _merge([_subset(cloud, keep), _subset(children, ~under)])
+
+
+def _subset(cloud: SurfaceCloud, keep: np.ndarray) -> SurfaceCloud:
+    return SurfaceCloud(cloud.means[keep], cloud.quats[keep], cloud.scales[keep], cloud.opacities[keep],
+                        cloud.colors[keep], cloud.nodes[keep], cloud.node_names)
