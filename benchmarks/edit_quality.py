@@ -21,13 +21,13 @@ benchmarks/reconstruct.py already fitted it with the same settings), measures:
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 import morphosim_gym as ms
+from _bars import bar_line, write_json
 from morphosim_gym.edit import scene_centre
 from morphosim_gym.generate.examples import PAPER_SCENES
 from morphosim_gym.metrics import delta_e, mean_lab, psnr, rgb_to_lab
@@ -142,12 +142,9 @@ def main() -> None:
         "reverse_error": max(r.get("reverse_error", 0.0) for r in results),
     }
     for key, bar in BARS.items():
-        ok = worst[key] <= bar if key in ("delta_e", "reverse_error") else worst[key] >= bar
-        print(f"  {'MET ' if ok else 'MISS'} {key:14s} bar {bar:6.2f}  worst {worst[key]:7.3f}")
+        print(bar_line(key, bar, worst[key], higher_is_better=key not in ("delta_e", "reverse_error")))
     print(f"  {'MET ' if all(r['removed'] and r['extracted'] for r in results) else 'MISS'} remove / extract")
-    if args.json:
-        args.json.write_text(json.dumps({"size": args.size, "seed": args.seed, "results": results}, indent=2))
-        print(f"wrote {args.json}")
+    write_json(args.json, {"size": args.size, "seed": args.seed, "results": results})
 
 
 if __name__ == "__main__":

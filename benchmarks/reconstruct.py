@@ -14,7 +14,6 @@ per-object instance IoU on input views and the feature field's semantic precisio
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from pathlib import Path
@@ -22,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import morphosim_gym as ms
+from _bars import bar_line, write_json
 from morphosim_gym.generate.examples import EXAMPLE_PROMPTS, PAPER_SCENES
 from morphosim_gym.reconstruct import ReconstructionConfig
 from morphosim_gym.reconstruct.pipeline import cache_path
@@ -85,11 +85,8 @@ def main() -> None:
     for key, bar in BARS.items():
         vals = [x[key] for x in rows]
         worst = max(vals) if key == "seconds" else min(vals)
-        ok = worst <= bar if key == "seconds" else worst >= bar
-        print(f"  {'MET ' if ok else 'MISS'} {key:14s} bar {bar:6.1f}  worst {worst:7.2f}  median {np.median(vals):7.2f}")
-    if args.json:
-        args.json.write_text(json.dumps({"size": args.size, "seed": args.seed, "reports": reports}, indent=2))
-        print(f"wrote {args.json}")
+        print(bar_line(key, bar, worst, higher_is_better=key != "seconds", median=float(np.median(vals))))
+    write_json(args.json, {"size": args.size, "seed": args.seed, "reports": reports})
 
 
 if __name__ == "__main__":

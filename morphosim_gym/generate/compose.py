@@ -25,7 +25,7 @@ import numpy as np
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, build_parts
-from .parts import SurfaceCloud, match_mean_color, parts_to_gaussians
+from .parts import TANGENTIAL_SCALE, SurfaceCloud, match_mean_color, parts_to_gaussians
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
@@ -422,7 +422,7 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
     s = setting.cloud
     for c, means0, _, _, _, static in placed:
         if static and len(c):
-            spacing = float(np.median(c.scales[:, :2])) / 0.62      # parts_to_gaussians: 0.62 spacing
+            spacing = float(np.median(c.scales[:, :2])) / TANGENTIAL_SCALE
             s = carve_under(s, means0[means0[:, 2] <= means0[:, 2].min() + spacing], spacing)
     add(s, s.means, s.quats, 0, -1)
     for c, means0, quats0, obj_id, k, _ in placed:

@@ -18,7 +18,9 @@ from ..scene.rotations import matrix_to_quat
 from .primitives import _split, sample_shape, shape_area
 
 __all__ = ["Part", "Texture", "ColorRule", "parts_to_gaussians", "euler", "SurfaceCloud", "LIGHT_DIR",
-           "match_mean_color"]
+           "TANGENTIAL_SCALE", "match_mean_color"]
+
+TANGENTIAL_SCALE = 0.62   # in-surface scale of an object's Gaussians, as a fraction of their spacing
 
 # A colour rule: "primary" (the object's colour), ("primary", k) (primary scaled by k and
 # clipped), ("mix", rgb, w) (primary blended towards rgb by w), or a fixed RGB triple.
@@ -119,6 +121,11 @@ class SurfaceCloud:
     def __len__(self) -> int:
         return len(self.means)
 
+    def subset(self, keep: np.ndarray) -> "SurfaceCloud":
+        """The Gaussians where `keep` [n] (bool) is set."""
+        return SurfaceCloud(self.means[keep], self.quats[keep], self.scales[keep], self.opacities[keep],
+                            self.colors[keep], self.nodes[keep], self.node_names)
+
 
 def _normal_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Quaternions whose local z is the normal, with a random twist about it."""
@@ -190,7 +197,7 @@ def parts_to_gaussians(parts: Sequence[Part], budget: int, primary: Sequence[flo
         pts = surf.points @ rot.T + np.asarray(part.position, dtype=np.float64)
         nrm = surf.normals @ rot.T
         spacing = math.sqrt(part.area() / count)
-        tangential = 0.62 * spacing
+        tangential = TANGENTIAL_SCALE * spacing
         base = resolve_color(part.color, primary)
         col = np.tile(base, (count, 1))
         bright = np.ones(count)

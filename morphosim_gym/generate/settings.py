@@ -308,7 +308,7 @@ def carve_under(cloud: SurfaceCloud, base: np.ndarray, spacing: float) -> Surfac
         weight.append(np.exp(-0.5 * d2[near] / (sigma * sigma)))
     keep = ~drop
     if not keys:
-        return _subset(cloud, keep)
+        return cloud.subset(keep)
     keys, parent, weight = np.concatenate(keys), np.concatenate(parent), np.concatenate(weight)
     uniq, inv = np.unique(keys, axis=0, return_inverse=True)
     inv = inv.ravel()
@@ -330,9 +330,4 @@ def carve_under(cloud: SurfaceCloud, base: np.ndarray, spacing: float) -> Surfac
     children = SurfaceCloud(np.c_[xy, blend(cloud.means[:, 2:3])[:, 0]], cloud.quats[strongest],
                             np.c_[np.full((n, 2), tang), tang * blend(ratio[:, None])], blend(cloud.opacities[:, None])[:, 0],
                             blend(cloud.colors), cloud.nodes[strongest], cloud.node_names)
-    return _merge([_subset(cloud, keep), _subset(children, ~under)])
-
-
-def _subset(cloud: SurfaceCloud, keep: np.ndarray) -> SurfaceCloud:
-    return SurfaceCloud(cloud.means[keep], cloud.quats[keep], cloud.scales[keep], cloud.opacities[keep],
-                        cloud.colors[keep], cloud.nodes[keep], cloud.node_names)
+    return _merge([cloud.subset(keep), children.subset(~under)])
