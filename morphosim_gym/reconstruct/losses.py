@@ -5,6 +5,8 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
+from .model import gather_rows
+
 __all__ = ["ssim_loss", "photometric_loss", "depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
            "arap_loss", "smooth_motion_loss", "psnr_torch"]
 
@@ -97,7 +99,7 @@ def arap_loss(node_pos_t: torch.Tensor, node_pos_0: torch.Tensor, pairs: torch.T
     """As-rigid-as-possible: distances between neighbouring nodes [P, 2] keep their canonical length."""
     if pairs.numel() == 0:
         return node_pos_t.sum() * 0.0
-    d_t = (node_pos_t[pairs[:, 0]] - node_pos_t[pairs[:, 1]]).norm(dim=-1)
+    d_t = (gather_rows(node_pos_t, pairs[:, 0]) - gather_rows(node_pos_t, pairs[:, 1])).norm(dim=-1)
     d_0 = (node_pos_0[pairs[:, 0]] - node_pos_0[pairs[:, 1]]).norm(dim=-1)
     return ((d_t - d_0) ** 2).mean()
 

@@ -16,7 +16,7 @@ from torch import nn
 from ..scene import Gaussians, Motion
 from ..scene.rotations import quat_normalize
 
-__all__ = ["DynamicGaussians", "quat_to_rotmat", "rbf_skinning", "inverse_sigmoid"]
+__all__ = ["DynamicGaussians", "quat_to_rotmat", "rbf_skinning", "inverse_sigmoid", "gather_rows"]
 
 
 def inverse_sigmoid(x: np.ndarray | torch.Tensor, eps: float = 1e-4):
@@ -26,6 +26,18 @@ def inverse_sigmoid(x: np.ndarray | torch.Tensor, eps: float = 1e-4):
         return torch.log(x / (1 - x))
     x = np.clip(x, eps, 1 - eps)
     return np.log(x / (1 - x))
+
+
+def gather_rows(x: torch.Tensor, index: torch.Tensor) -> torch.Tensor:
+    """x[index] for an integer index of any shape, with a deterministic backward.
+
+    On CPU, the backward of advanced indexing (`x[index]`) accumulates repeated rows with
+    atomic adds across threads, so the gradient of a row that many entries share (a node that
+    skins thousands of Gaussians) changes in its last bits from run to run, and a long fit
+    drifts apart. `index_select`'s backward sums in index order.
+    """
+    flat = torch.index_select(x, 0, index.reshape(-1))
+    return flat.reshape(tuple(index.shape) + tuple(x.shape[1:]))
 
 
 def quat_to_rotmat(q: torch.Tensor) -> torch.Tensor:
@@ -148,10 +160,10 @@ class DynamicGaussians(nn.Module):
         idx = self.skin_nodes[self.bound].clamp(min=0)                                   # [B, M]
         w = self.skin_weights[self.bound]                                                # [B, M]
         m = self.means[self.bound]
-        moved = torch.einsum("bmij,bj->bmi", R[idx], m) + tr[idx]                        # [B, M, 3]
+        moved = torch.einsum("bmij,bj->bmi", gather_rows(R, idx), m) + gather_rows(tr, idx)  # [B, M, 3]
         means = self.means.clone()
         means[self.bound] = (w[..., None] * moved).sum(1)
-        qb = q[idx]                                                                      # [B, M, 4]
+        qb = gather_rows(q, idx)                                                         # [B, M, 4]
         sign = torch.where((qb * qb[:, :1]).sum(-1, keepdim=True) < 0, -1.0, 1.0)
         blend = (w[..., None] * sign * qb).sum(1)
         blend = blend / blend.norm(dim=-1, keepdim=True)
@@ -165,7 +177,7 @@ class DynamicGaussians(nn.Module):
         R = quat_to_rotmat(q)
         tr = self.node_trans[frame]
         idx = nodes.clamp(min=0)
-        moved = torch.einsum("pmij,pj->pmi", R[idx], points) + tr[idx]
+        moved = torch.einsum("pmij,pj->pmi", gather_rows(R, idx), points) + gather_rows(tr, idx)
         w = torch.where(nodes >= 0, weights, torch.zeros_like(weights))
         return (w[..., None] * moved).sum(1)
 

@@ -1,4 +1,4 @@
-"""The 4D fit: settings checks and the learning-rate decay that lets node poses settle."""
+"""The 4D fit: settings checks, the learning-rate decay that lets node poses settle, deterministic gradients."""
 
 from dataclasses import replace
 
@@ -46,3 +46,31 @@ def test_decaying_learning_rate_settles_the_node_poses(clip):
 def test_bad_settings_are_named(change, message):
     with pytest.raises(ValueError, match=message):
         replace(FitConfig(), **change)
+
+
+def test_scaffold_gradients_are_bit_identical_across_runs():
+    """Thousands of Gaussians share each node; their gradients must sum in a fixed order (CPU
+    advanced-indexing backward adds with atomics, so a long fit drifted apart run to run)."""
+    from morphosim_gym.reconstruct.losses import arap_loss
+    from morphosim_gym.reconstruct.model import DynamicGaussians
+
+    rng = np.random.default_rng(0)
+    n, k, frames = 20000, 6, 3
+    means = rng.normal(size=(n, 3))
+    quats = rng.normal(size=(n, 4))
+    nodes = rng.normal(size=(k, 3))
+    rot = np.broadcast_to(np.eye(3), (frames, k, 3, 3)).copy()
+    trans = rng.normal(scale=0.1, size=(frames, k, 3))
+    model = DynamicGaussians(means, quats, np.full((n, 3), 0.05), np.full(n, 0.5), np.full((n, 3), 0.5),
+                             np.zeros(n, np.int32), nodes, np.zeros(k, np.int32), rot, trans)
+    upstream = torch.from_numpy(rng.normal(size=(n, 7)).astype(np.float32))
+    pairs = torch.tensor([[0, 1], [0, 2], [1, 2], [3, 4], [4, 5]] * 2000)
+    grads = set()
+    for _ in range(8):
+        model.zero_grad(set_to_none=True)
+        m, q = model.warp(1)
+        centres = model.points_at(model.node_centres, torch.arange(k)[:, None], torch.ones(k, 1), 1)
+        loss = (torch.cat([m, q], -1) * upstream).sum() + arap_loss(centres, model.node_centres * 1.1, pairs)
+        loss.backward()
+        grads.add(model.node_quats.grad.numpy().tobytes() + model.node_trans.grad.numpy().tobytes())
+    assert len(grads) == 1
