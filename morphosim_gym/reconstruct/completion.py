@@ -5,7 +5,8 @@ Two documented priors (heuristics, not learned):
   around the observed ground is tiled with flat Gaussians in rings of growing size (fine next to
   what was seen, coarse far away), each coloured like the nearest observed cell (the ground
   continues beyond and behind what the camera saw); all cells grow when the rings would need
-  more than `max_ground` discs, so the ground always reaches as far out;
+  more than `max_ground` discs, so the ground always reaches as far out; where the views show
+  the ground end against empty space, it ends there on every side (`ground_reach`);
 * symmetry: each object's visible side is mirrored across the vertical plane through its
   centre that faces the camera it was seen from, wherever that leaves empty space (objects
   are assumed left/right symmetric in depth: their far side looks like their near side).
@@ -25,7 +26,7 @@ from ..render import rasterize
 from ..scene import GeneratedClip
 from .model import DynamicGaussians, inverse_sigmoid, quat_to_rotmat
 
-__all__ = ["complete", "fit_ground_plane", "visible_weights"]
+__all__ = ["complete", "fit_ground_plane", "ground_reach", "visible_weights"]
 
 
 def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 200,
@@ -198,7 +199,7 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
 
 
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
-                     max_new: int, levels: int = 7, spread: float = 3.0) -> int:
+                     max_new: int, background: set[int] = frozenset(), levels: int = 7, spread: float = 3.0) -> int:
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
@@ -220,6 +221,9 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(n, e1)
     uv = np.c_[means[ground] @ e1, means[ground] @ e2]
+    objects = ~np.isin(ids, list(background)) & (opac > 0.5)
+    centre = np.median(np.c_[means[objects] @ e1, means[objects] @ e2], axis=0) if objects.any() else uv.mean(0)
+    reach = ground_reach(clip, n, d, e1, e2, centre, seen=float(np.linalg.norm(uv - centre, axis=1).max()))
     lo, hi = uv.min(0), uv.max(0)
     extent = hi - lo
     lo, hi = lo - spread * extent, hi + spread * extent
@@ -231,6 +235,8 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     cell = max(float(np.median(scales[ground, :2])) * 3.0, float((hi - lo).max()) / 2048.0)
     for _ in range(8):
         pts, src, side = _ring_cells(uv, ouv, scales[static, :2].max(1), lo, hi, cell, levels, rng)
+        inside = np.linalg.norm(pts - centre, axis=1) <= reach
+        pts, src, side = pts[inside], src[inside], side[inside]
         if len(pts) <= max_new:
             break
         cell *= 1.5
@@ -247,6 +253,45 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     jitter = 1.0 + 0.04 * rng.standard_normal((k, 1))
     _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors[src] * jitter, 0, 1), np.full(k, label))
     return k
+
+
+def ground_reach(clip: GeneratedClip, n: np.ndarray, d: float, e1: np.ndarray, e2: np.ndarray, centre: np.ndarray,
+                 seen: float, slack: float = 1.5, frame_stride: int = 8, min_share: float = 0.005,
+                 quantile: float = 0.5) -> float:
+    """How far from `centre` (plane coordinates on axes e1, e2) the ground n . x = d may reach,
+    given that the input views show it up to `seen` from there.
+
+    Free-space evidence: an input pixel that shows nothing (no depth) although its ray meets the
+    plane in front of the camera proves the ground absent at that meeting point; the nearest such
+    point (a low `quantile`, in percent, against stray pixels) bounds the ground. When that bound
+    lies within `slack` times `seen`, the views show where the ground ends (a floor disc against
+    empty water, a table edge): it ends at `seen`, on every side. Otherwise the free space lies far
+    beyond (rays grazing the horizon past hills or a wall) and only bounds it there; with no such
+    pixels (at least `min_share` of those sampled) nothing bounds it (inf)."""
+    if clip.depth is None:
+        return float("inf")
+    H, W = clip.height, clip.width
+    jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    pix = np.stack([jj, ii], -1)
+    hits, sampled = [], 0
+    for f in range(0, clip.num_frames, max(1, frame_stride)):
+        cam = clip.cameras[f]
+        empty = clip.depth[f] <= 0
+        sampled += H * W
+        if not empty.any():
+            continue
+        origin = cam.position
+        ray = cam.unproject(pix[empty], np.ones(int(empty.sum()))) - origin
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (d - origin @ n) / (ray @ n)
+        ok = np.isfinite(t) & (t > 0)
+        if ok.any():
+            p = origin + t[ok, None] * ray[ok]
+            hits.append(np.c_[p @ e1, p @ e2])
+    if not hits or sum(len(h) for h in hits) < min_share * sampled:
+        return float("inf")
+    free = float(np.percentile(np.linalg.norm(np.concatenate(hits) - centre, axis=1), quantile))
+    return seen if free <= slack * seen else free
 
 
 def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell: float,
@@ -376,13 +421,13 @@ def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: 
     Ground cells also fill the gaps that the input views see between observed Gaussians (far
     ground seen at a grazing angle is sparse in 3D), so a short fit should follow to blend them
     in; far-side Gaussians that an input view shows (a wrong silhouette) are dropped."""
-    rng = np.random.default_rng([seed, 11])
-    first = model.num
-    _complete_ground(model, clip, dynamic, rng, max_ground)
-    ground = _split_near(model, clip, first)
     from ..language.vocabulary import word_to_setting
 
+    rng = np.random.default_rng([seed, 11])
     background = {i for i, name in clip.labels.items() if word_to_setting(name.lower())}
+    first = model.num
+    _complete_ground(model, clip, dynamic, rng, max_ground, background)
+    ground = _split_near(model, clip, first)
     first = model.num
     _complete_symmetry(model, clip, dynamic, reference, background)
     sym = _drop_seen(model, clip, first)

@@ -1,11 +1,13 @@
-"""Completion of what a monocular clip never shows: the ground plane prior and its budget."""
+"""Completion of what a monocular clip never shows: the ground plane prior, its budget and its end."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import torch
 
 import morphosim_gym as ms
-from morphosim_gym.reconstruct.completion import _near_cameras, complete, fit_ground_plane
+from morphosim_gym.reconstruct.completion import _near_cameras, complete, fit_ground_plane, ground_reach
 from morphosim_gym.reconstruct.initialize import initialize
 
 SMALL = ms.GenerationConfig(width=48, height=48, num_frames=9, detail=0.5)
@@ -31,12 +33,12 @@ def test_ground_plane_fit_ignores_outliers():
         fit_ground_plane(pts[:2], rng)
 
 
-def _complete_ground(clip, budget):
+def _complete_ground(clip, budget, dynamic=None):
     model = initialize(clip, seed=0).model
     first = model.num
     with torch.no_grad():
         seen = model.means.numpy().copy()
-    counts = complete(model, clip, {0: False, 1: True}, seed=0, max_ground=budget)
+    counts = complete(model, clip, dynamic or {0: False, 1: True}, seed=0, max_ground=budget)
     with torch.no_grad():
         added = model.means.numpy()[first:first + counts["ground"]]
     return model, first, seen, added
@@ -71,3 +73,23 @@ def test_far_sides_seen_by_the_input_views_are_dropped(clip):
     depth = means[car] @ cam.world_to_camera[2, :3] + cam.world_to_camera[2, 3]
     mirrored = car[-counts["symmetry"]:] if counts["symmetry"] else car[:0]
     assert np.median(depth[np.isin(car, mirrored)]) > np.median(depth[~np.isin(car, mirrored)])
+
+
+def test_ground_ends_where_the_views_show_it_end(clip):
+    """Underwater, the floor is a disc whose far edge the camera sees against empty water: the
+    completed floor stops there on every side instead of running on for three extents. On the
+    car's field, hills hide the ground's end: it still runs on."""
+    # at 96 px the initial fit's ground reaches far enough to meet the free space the views show
+    sim = ms.MorphoSim(generation=replace(SMALL, width=96, height=96), reconstruction="oracle")
+    fish = sim.generate_clip("The fish swims through the crystal-clear waters from right to left", seed=0)
+    gt = fish.ground_truth
+    floor = gt.gaussians.means[gt.gaussians.object_ids == gt.object("water").id]
+    radius = np.linalg.norm(floor[:, :2], axis=1).max()
+    _, _, _, added = _complete_ground(fish, 6000, dynamic={0: False, 1: True, 2: False})
+    assert len(added) > 0 and np.linalg.norm(added[:, :2], axis=1).max() < 1.1 * radius
+    up, e1, e2 = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    # empty pixels past the disc's edge meet the plane just beyond it: the ground ends where seen
+    assert ground_reach(fish, up, 0.0, e1, e2, np.zeros(2), seen=1.1 * radius) == 1.1 * radius
+    # seen only near the objects, the free space bounds it: past the disc, not far past
+    assert radius < ground_reach(fish, up, 0.0, e1, e2, np.zeros(2), seen=0.2 * radius) < 2.0 * radius
+    assert ground_reach(clip, up, 0.0, e1, e2, np.zeros(2), seen=radius) > 3.0 * radius
