@@ -199,7 +199,7 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
 
 
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
-                     max_new: int, background: set[int] = frozenset(), levels: int = 7, spread: float = 3.0) -> int:
+                     max_new: int, background: set[int], levels: int = 7, spread: float = 3.0) -> int:
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
@@ -270,18 +270,15 @@ def ground_reach(clip: GeneratedClip, n: np.ndarray, d: float, e1: np.ndarray, e
     pixels (at least `min_share` of those sampled) nothing bounds it (inf)."""
     if clip.depth is None:
         return float("inf")
-    H, W = clip.height, clip.width
-    jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    pix = np.stack([jj, ii], -1)
     hits, sampled = [], 0
     for f in range(0, clip.num_frames, max(1, frame_stride)):
         cam = clip.cameras[f]
         empty = clip.depth[f] <= 0
-        sampled += H * W
+        sampled += empty.size
         if not empty.any():
             continue
         origin = cam.position
-        ray = cam.unproject(pix[empty], np.ones(int(empty.sum()))) - origin
+        ray = cam.unproject(cam.pixel_centres()[empty], np.ones(int(empty.sum()))) - origin
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (d - origin @ n) / (ray @ n)
         ok = np.isfinite(t) & (t > 0)

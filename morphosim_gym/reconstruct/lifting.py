@@ -87,9 +87,7 @@ def backproject(clip: GeneratedClip, frame: int, select: np.ndarray | None = Non
     cam = clip.cameras[frame]
     depth = clip.depth[frame]
     masks = clip.masks[frame] if clip.masks is not None else np.zeros(depth.shape, np.int32)
-    H, W = depth.shape
-    jj, ii = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
-    world = cam.unproject(np.stack([jj, ii], -1), depth)
+    world = cam.unproject(cam.pixel_centres(), depth)
     normals = _normals(cam, world)
     sel = interior_mask(masks, depth) if select is None else (select & (depth > 0))
     if stride > 1:

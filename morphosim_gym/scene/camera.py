@@ -197,6 +197,11 @@ class Camera:
             uv = np.stack([self.fx * pc[..., 0] / z + self.cx, self.fy * pc[..., 1] / z + self.cy], axis=-1)
         return uv, z
 
+    def pixel_centres(self) -> np.ndarray:
+        """[H, W, 2] pixel coordinates (x, y) of every pixel's centre."""
+        jj, ii = np.meshgrid(np.arange(self.width) + 0.5, np.arange(self.height) + 0.5)
+        return np.stack([jj, ii], -1)
+
     def unproject(self, uv: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """World points [..., 3] for pixel coordinates [..., 2] at camera depths [...]."""
         uv = np.asarray(uv, dtype=np.float64)

@@ -33,6 +33,9 @@ def test_project_unproject_roundtrip():
     pts = np.random.default_rng(0).normal(size=(20, 3))
     uv, z = cam.project(pts)
     np.testing.assert_allclose(cam.unproject(uv, z), pts, atol=1e-9)
+    centres = cam.pixel_centres()
+    assert centres.shape == (48, 64, 2)
+    np.testing.assert_array_equal(centres[2, 5], [5.5, 2.5])         # (x, y) of row 2, column 5
 
 
 @pytest.mark.parametrize("bad", [

@@ -53,8 +53,7 @@ class PriorEstimators(Protocol):
 def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: float = 50.0) -> np.ndarray:
     """[H, W] float32 camera-z depth of the world plane z = ground_height seen by `camera`
     (0 where the pixel ray misses the plane, hits it behind the camera or beyond `max_depth`)."""
-    h, w = camera.height, camera.width
-    jj, ii = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
+    jj, ii = np.moveaxis(camera.pixel_centres(), -1, 0)
     dirs_cam = np.stack([(jj - camera.cx) / camera.fx, (ii - camera.cy) / camera.fy, np.ones_like(jj)], -1)
     c2w = camera.camera_to_world
     dirs = dirs_cam @ c2w[:3, :3].T  # world direction per unit camera depth
