@@ -25,7 +25,6 @@ from typing import Any
 
 import numpy as np
 
-from .camera import Camera
 from .clip import GeneratedClip
 from .features import FeatureDecoder
 from .gaussians import Gaussians
