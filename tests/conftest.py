@@ -23,7 +23,6 @@ def make_tiny_scene(n_per_object: int = 200, frames: int = 9, fps: float = 4.0, 
     g = Gaussians(means=means, quats=rng.normal(size=(3 * n, 4)), scales=rng.uniform(0.03, 0.08, (3 * n, 3)),
                   opacities=rng.uniform(0.6, 1.0, 3 * n), colors=colors, object_ids=ids,
                   features=rng.normal(size=(3 * n, features)) if features else None)
-    t = np.arange(frames)
     # node 0: ball, translation along +x; node 1: cube, rotation about its centre
     rot = np.zeros((frames, 2, 4))
     rot[:, 0] = [1, 0, 0, 0]
