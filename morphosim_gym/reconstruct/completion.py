@@ -1,12 +1,16 @@
 """Complete what a monocular clip never shows, so novel views are plausible rather than empty.
 
-Two documented priors (heuristics, not learned):
+Three documented priors (heuristics, not learned):
 * ground: a plane is fitted (RANSAC) to the static Gaussians that face up; the empty plane
   around the observed ground is tiled with flat Gaussians in rings of growing size (fine next to
   what was seen, coarse far away), each coloured like the nearest observed cell (the ground
   continues beyond and behind what the camera saw); all cells grow when the rings would need
   more than `max_ground` discs, so the ground always reaches as far out; where the views show
-  the ground end against empty space, it ends there on every side (`ground_reach`);
+  the ground end against empty space, it ends there on every side (`ground_reach`), and where
+  a backdrop closes the view, the ground ends not far past it;
+* backdrop: where most static Gaussians that face sideways lie on one vertical plane (hills,
+  a wall: `find_backdrop`), it continues sideways beyond what was seen, up to the height seen
+  (a novel view turned towards its end should not find the sky or the void there);
 * symmetry: each object's visible side is mirrored across the vertical plane through its
   centre that faces the camera it was seen from, wherever that leaves empty space (objects
   are assumed left/right symmetric in depth: their far side looks like their near side).
@@ -18,15 +22,19 @@ iterations after completion.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 import torch
 
 from ..render import rasterize
 from ..scene import GeneratedClip
 from .model import DynamicGaussians, inverse_sigmoid, quat_to_rotmat
 
-__all__ = ["complete", "fit_ground_plane", "ground_reach", "visible_weights"]
+__all__ = ["Backdrop", "complete", "find_backdrop", "fit_backdrop_plane", "fit_ground_plane", "ground_reach",
+           "visible_weights"]
 
 
 def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 200,
@@ -54,12 +62,44 @@ def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 
             best = (n, d, inl)
     n, d, inl = best
     if inl.sum() >= 3:               # least-squares refinement on the inliers
-        q = points[inl]
-        c = q.mean(0)
-        _, _, vt = np.linalg.svd(q - c, full_matrices=False)
-        n = vt[-1] if vt[-1][2] > 0 else -vt[-1]
+        n, c = _least_squares_normal(points[inl])
+        n = n if n[2] > 0 else -n
         d = float(n @ c)
         inl = np.abs(points @ n - d) < tol
+    return n, d, inl
+
+
+def _least_squares_normal(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(unit normal, centroid) of the least-squares plane (or line, in 2D) through `points`."""
+    c = points.mean(0)
+    _, _, vt = np.linalg.svd(points - c, full_matrices=False)
+    return vt[-1], c
+
+
+def fit_backdrop_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 200,
+                       tolerance: float | None = None) -> tuple[np.ndarray, float, np.ndarray]:
+    """RANSAC vertical plane n . x = d (n horizontal) through `points` [n, 3]; returns (n, d, inlier mask)."""
+    if len(points) < 2:
+        raise ValueError(f"Expected at least 2 points to fit a vertical plane, found {len(points)}")
+    scale = float(np.ptp(points, axis=0).max()) or 1.0
+    tol = tolerance if tolerance is not None else 0.01 * scale
+    xy = points[:, :2]
+    best = (np.array([0.0, 1.0, 0.0]), float(np.median(points[:, 1])), np.zeros(len(points), bool))
+    for _ in range(iters):
+        a, b = xy[rng.choice(len(points), 2, replace=False)]
+        t = b - a
+        norm = np.linalg.norm(t)
+        if norm < 1e-12:
+            continue
+        n2 = np.array([-t[1], t[0]]) / norm
+        inl = np.abs(xy @ n2 - n2 @ a) < tol
+        if inl.sum() > best[2].sum():
+            best = (np.r_[n2, 0.0], float(n2 @ a), inl)
+    n, d, inl = best
+    if inl.sum() >= 2:               # least-squares refinement of the ground line on the inliers
+        n2, c = _least_squares_normal(xy[inl])
+        n, d = np.r_[n2, 0.0], float(n2 @ c)
+        inl = np.abs(xy @ n2 - d) < tol
     return n, d, inl
 
 
@@ -198,8 +238,113 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
     model.rebind()
 
 
+@dataclass(frozen=True)
+class Backdrop:
+    """A vertical plane normal . x = offset behind the objects (hills, a wall): `normal` is
+    horizontal and points towards the objects, `inliers` index the model's Gaussians on it and
+    `distance` is the objects' (median) centre's distance to it."""
+
+    normal: np.ndarray
+    offset: float
+    inliers: np.ndarray
+    distance: float
+
+
+def find_backdrop(model: DynamicGaussians, dynamic: dict, background: set[int], rng: np.random.Generator,
+                  min_inliers: int = 200, min_share: float = 0.6) -> Backdrop | None:
+    """The backdrop of a fitted model, if it has one: a vertical plane (`fit_backdrop_plane`) through
+    at least `min_inliers` of the static, opaque Gaussians that face sideways, and at least
+    `min_share` of them (sideways Gaussians scattered over rocks or plants fit no plane)."""
+    with torch.no_grad():
+        means = model.means.numpy().astype(np.float64)
+        normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
+        ids = model.object_ids.numpy()
+        opac = model.opacities().numpy()
+    static_ids = [i for i, d in dynamic.items() if not d]
+    objects = ~np.isin(ids, list(background)) & (opac > 0.5)
+    cand = np.flatnonzero(np.isin(ids, static_ids) & (np.abs(normals[:, 2]) < 0.3) & (opac > 0.5))
+    if len(cand) < min_inliers or not objects.any():
+        return None
+    n, d, inl = fit_backdrop_plane(means[cand], rng)
+    if inl.sum() < max(min_inliers, min_share * len(cand)):
+        return None
+    centre = np.median(means[objects], axis=0)
+    if n @ centre < d:
+        n, d = -n, -d
+    return Backdrop(n, d, cand[inl], float(n @ centre - d))
+
+
+def _complete_backdrop(model: DynamicGaussians, backdrop: Backdrop, rng: np.random.Generator, max_new: int,
+                       spread: float = 0.75, window: float = 0.1) -> int:
+    """Continue the backdrop sideways, along its plane, by `spread` of its seen width on either
+    side, and fill the holes in what was seen (behind the objects). Within the seen width the
+    top follows the highest point seen within `window` of the seen width; beyond it, the median
+    of those tops (a wall keeps its edge, hills their typical height rather than the last
+    peak). The bottom is the lowest point seen. Each disc takes the colour of the nearest seen
+    backdrop Gaussian; the cells grow where more than `max_new` would be needed. Returns how
+    many discs were added."""
+    with torch.no_grad():
+        means = model.means.numpy().astype(np.float64)
+        ids = model.object_ids.numpy()
+        colors = model.colors().numpy()
+        scales = model.scales().numpy()
+        opac = model.opacities().numpy()
+    n, on = backdrop.normal, backdrop.inliers
+    e1 = np.cross(n, [0.0, 0.0, 1.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.array([0.0, 0.0, 1.0])
+    uv = np.c_[means[on] @ e1, means[on] @ e2]
+    lo, hi = uv.min(0), uv.max(0)
+    lo[0], hi[0] = lo[0] - spread * (hi[0] - lo[0]), hi[0] + spread * (hi[0] - lo[0])
+    with torch.no_grad():
+        facing = np.abs(quat_to_rotmat(model.quats).numpy()[:, :, 2] @ n) > 0.7
+    # what covers the backdrop: Gaussians on it that face the same way (not the ground's discs
+    # meeting it, whose footprint would cover the backdrop's plane above and below them)
+    near = np.flatnonzero((np.abs(means @ n - backdrop.offset) < 3.0 * float(np.median(scales[on].max(1))))
+                          & facing & (opac > 0.1))
+    ouv = np.c_[means[near] @ e1, means[near] @ e2]
+    cell = max(float(np.median(scales[on, :2])) * 3.0, float((hi - lo).max()) / 2048.0)
+    for _ in range(12):
+        size = np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)
+        empty = ~_occupancy(ouv, scales[near].max(1), lo, size, cell)
+        rows, cols = np.nonzero(empty)
+        pu, pv = lo[0] + (cols + 0.5) * cell, lo[1] + (rows + 0.5) * cell
+        # the top: per column of cells, the highest point seen within `window` of it (the views
+        # show the outermost columns only in part)
+        col = np.clip(np.floor((uv[:, 0] - lo[0]) / cell).astype(int), 0, size[0] - 1)
+        tops = np.full(size[0], -np.inf)
+        np.maximum.at(tops, col, uv[:, 1])
+        m = max(1, int(np.ceil(window * np.ptp(uv[:, 0]) / cell)))
+        tops = np.where(np.isfinite(tops), sliding_window_view(np.pad(tops, m, constant_values=-np.inf),
+                                                                2 * m + 1).max(axis=1), -np.inf)
+        seen_cols = np.flatnonzero(np.isfinite(tops))
+        top = np.interp(cols, seen_cols, tops[seen_cols])
+        beyond = (cols < seen_cols[0]) | (cols > seen_cols[-1])
+        top[beyond] = np.median(tops[seen_cols])
+        keep = pv <= top
+        if keep.sum() <= max_new:
+            break
+        cell *= 1.5
+    rows, cols, pu, pv = rows[keep], cols[keep], pu[keep], pv[keep]
+    if len(pu) > max_new:                                    # keep those nearest the seen backdrop
+        order = np.argsort(np.abs(pu - np.clip(pu, uv[:, 0].min(), uv[:, 0].max())), kind="stable")[:max_new]
+        rows, cols, pu, pv = rows[order], cols[order], pu[order], pv[order]
+    if not len(pu):
+        return 0
+    src = on[_nearest_source(uv, lo, size, cell)[rows, cols]]
+    jitter = 0.3 * (rng.random((len(pu), 2)) - 0.5) * cell
+    pts = (pu + jitter[:, 0])[:, None] * e1 + (pv + jitter[:, 1])[:, None] * e2 + backdrop.offset * n
+    label = int(np.bincount(ids[on]).argmax())
+    _append_discs(model, pts, n, np.full(len(pts), cell), colors[src], label, rng)
+    return len(pts)
+
+
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
-                     max_new: int, background: set[int], levels: int = 7, spread: float = 3.0) -> int:
+                     max_new: int, background: set[int], backdrop: Backdrop | None = None, levels: int = 7,
+                     spread: float = 3.0, backdrop_slack: float = 1.5) -> int:
+    """Tile the ground plane around what was seen (module docstring); returns how many discs were
+    added. With a backdrop, the ground reaches at most `backdrop_slack` times the backdrop's
+    distance from the objects (or as far as it was seen)."""
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
@@ -223,7 +368,10 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     uv = np.c_[means[ground] @ e1, means[ground] @ e2]
     objects = ~np.isin(ids, list(background)) & (opac > 0.5)
     centre = np.median(np.c_[means[objects] @ e1, means[objects] @ e2], axis=0) if objects.any() else uv.mean(0)
-    reach = ground_reach(clip, n, d, e1, e2, centre, seen=float(np.linalg.norm(uv - centre, axis=1).max()))
+    seen = float(np.linalg.norm(uv - centre, axis=1).max())
+    reach = ground_reach(clip, n, d, e1, e2, centre, seen=seen)
+    if backdrop is not None:        # the backdrop bounds the world: the ground ends not far past it
+        reach = min(reach, max(seen, backdrop_slack * backdrop.distance))
     lo, hi = uv.min(0), uv.max(0)
     extent = hi - lo
     lo, hi = lo - spread * extent, hi + spread * extent
@@ -246,13 +394,20 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
         order = np.argsort(side, kind="stable")[:max_new]
         pts, src, side = pts[order], src[order], side[order]
     k = len(pts)
-    if k == 0:
-        return 0
-    quats = np.tile(_quat_from_normal(n), (k, 1))
+    if k:
+        _append_discs(model, pts, n, side, colors[src], label, rng)
+    return k
+
+
+def _append_discs(model: DynamicGaussians, pts: np.ndarray, normal: np.ndarray, side: np.ndarray,
+                  colors: np.ndarray, label: int, rng: np.random.Generator) -> None:
+    """Append flat opaque discs at `pts` [k, 3] facing `normal`, `side` [k] wide, with slightly
+    jittered `colors` [k, 3] and instance `label`."""
+    k = len(pts)
+    quats = np.tile(_quat_from_normal(normal), (k, 1))
     sc = np.c_[side * 0.8, side * 0.8, side * 0.15]
     jitter = 1.0 + 0.04 * rng.standard_normal((k, 1))
-    _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors[src] * jitter, 0, 1), np.full(k, label))
-    return k
+    _append(model, pts, quats, sc, np.full(k, 0.95), np.clip(colors * jitter, 0, 1), np.full(k, label))
 
 
 def ground_reach(clip: GeneratedClip, n: np.ndarray, d: float, e1: np.ndarray, e2: np.ndarray, centre: np.ndarray,
@@ -291,13 +446,9 @@ def ground_reach(clip: GeneratedClip, n: np.ndarray, d: float, e1: np.ndarray, e
     return seen if free <= slack * seen else free
 
 
-def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell: float,
-                levels: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Plane coordinates [k, 2], source ground index [k] and side [k] of the discs that tile the
-    empty plane in `[lo, hi]` around the observed ground `uv` in rings of growing cells (`cell`
-    wide next to what was seen); `ouv`/`oscale`: every observed static Gaussian, which covers
-    the ground under it over its footprint."""
-    size = np.ceil((hi - lo) / cell).astype(int)
+def _occupancy(ouv: np.ndarray, oscale: np.ndarray, lo: np.ndarray, size: np.ndarray, cell: float) -> np.ndarray:
+    """[rows, cols] cells of the plane grid (`size` cells from `lo`) that observed Gaussians at
+    plane coordinates `ouv` [m, 2] cover over their footprint (largest scale `oscale` [m])."""
     occupied = np.zeros(tuple(size[::-1]), bool)
     ocells = np.floor((ouv - lo) / cell).astype(int)
     inside = np.all((ocells >= 0) & (ocells < size), axis=1)
@@ -308,19 +459,35 @@ def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndar
         for dy in range(-r, r + 1):
             for dx in range(-r, r + 1):
                 occupied[np.clip(ocells[sel, 1] + dy, 0, size[1] - 1), np.clip(ocells[sel, 0] + dx, 0, size[0] - 1)] = True
-    empty = (~occupied).astype(np.uint8)
-    if empty.sum() == 0:
-        return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0)
-    dist = cv2.distanceTransform(empty, cv2.DIST_L2, 5)
-    # colour of an added cell: the nearest observed ground Gaussian's
+    return occupied
+
+
+def _nearest_source(uv: np.ndarray, lo: np.ndarray, size: np.ndarray, cell: float) -> np.ndarray:
+    """[rows, cols] index into `uv` [n, 2] of the source Gaussian nearest each cell of the plane
+    grid (whose colour a new disc there takes)."""
     grid = np.full(tuple(size[::-1]), -1, np.int64)
     cells = np.clip(np.floor((uv - lo) / cell).astype(int), 0, size - 1)
     grid[cells[:, 1], cells[:, 0]] = np.arange(len(uv))
-    no_ground = (grid < 0).astype(np.uint8)
-    _, labels = cv2.distanceTransformWithLabels(no_ground, cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL)
-    zero_rows, zero_cols = np.nonzero(no_ground == 0)
-    label_to_gauss = np.full(labels.max() + 1, -1, np.int64)
-    label_to_gauss[labels[zero_rows, zero_cols]] = grid[zero_rows, zero_cols]
+    no_source = (grid < 0).astype(np.uint8)
+    _, labels = cv2.distanceTransformWithLabels(no_source, cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL)
+    zero_rows, zero_cols = np.nonzero(no_source == 0)
+    label_to_source = np.full(labels.max() + 1, -1, np.int64)
+    label_to_source[labels[zero_rows, zero_cols]] = grid[zero_rows, zero_cols]
+    return label_to_source[labels]
+
+
+def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell: float,
+                levels: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Plane coordinates [k, 2], source ground index [k] and side [k] of the discs that tile the
+    empty plane in `[lo, hi]` around the observed ground `uv` in rings of growing cells (`cell`
+    wide next to what was seen); `ouv`/`oscale`: every observed static Gaussian, which covers
+    the ground under it over its footprint."""
+    size = np.ceil((hi - lo) / cell).astype(int)
+    empty = (~_occupancy(ouv, oscale, lo, size, cell)).astype(np.uint8)
+    if empty.sum() == 0:
+        return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0)
+    dist = cv2.distanceTransform(empty, cv2.DIST_L2, 5)
+    nearest = _nearest_source(uv, lo, size, cell)
     # level L (cells 2^L fine cells wide) fills the empty cells whose distance to the observed
     # ground (in fine cells) is in [2^(L+1) - 2, 2^(L+2) - 2)
     pts_all, src_all, size_all = [], [], []
@@ -333,7 +500,7 @@ def _ring_cells(uv: np.ndarray, ouv: np.ndarray, oscale: np.ndarray, lo: np.ndar
         cc = np.minimum(cols * step + step // 2, size[0] - 1).ravel()
         d_c = dist[cr, cc]
         take = (empty[cr, cc] > 0) & (d_c >= lo_d) & (d_c < hi_d)
-        src = label_to_gauss[labels[cr[take], cc[take]]]
+        src = nearest[cr[take], cc[take]]
         ok = src >= 0
         r, c = rows.ravel()[take][ok], cols.ravel()[take][ok]
         side = cell * step
@@ -410,10 +577,10 @@ def _complete_symmetry(model: DynamicGaussians, clip: GeneratedClip, dynamic: di
 
 
 def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: int = 0,
-             reference: dict | None = None, max_ground: int = 12000) -> dict[str, int]:
-    """Add ground and far-side Gaussians to a fitted model (in place); returns how many of each.
-    `max_ground` bounds the ground discs of the rings (splitting those too close to a camera can
-    add a few).
+             reference: dict | None = None, max_ground: int = 12000, max_backdrop: int = 4000) -> dict[str, int]:
+    """Add ground, backdrop and far-side Gaussians to a fitted model (in place); returns how many
+    of each. `max_ground` and `max_backdrop` bound the discs of the ground's rings and of the
+    backdrop (splitting those too close to a camera can add a few).
 
     Ground cells also fill the gaps that the input views see between observed Gaussians (far
     ground seen at a grazing angle is sparse in 3D), so a short fit should follow to blend them
@@ -422,10 +589,16 @@ def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: 
 
     rng = np.random.default_rng([seed, 11])
     background = {i for i, name in clip.labels.items() if word_to_setting(name.lower())}
+    backdrop = find_backdrop(model, dynamic, background, np.random.default_rng([seed, 12]))
     first = model.num
-    _complete_ground(model, clip, dynamic, rng, max_ground, background)
+    _complete_ground(model, clip, dynamic, rng, max_ground, background, backdrop)
     ground = _split_near(model, clip, first)
+    wall = 0
+    if backdrop is not None:
+        first = model.num
+        _complete_backdrop(model, backdrop, rng, max_backdrop)
+        wall = _split_near(model, clip, first)
     first = model.num
     _complete_symmetry(model, clip, dynamic, reference, background)
     sym = _drop_seen(model, clip, first)
-    return {"ground": ground, "symmetry": sym}
+    return {"ground": ground, "backdrop": wall, "symmetry": sym}

@@ -1,4 +1,5 @@
-"""Completion of what a monocular clip never shows: the ground plane prior, its budget and its end."""
+"""Completion of what a monocular clip never shows: the ground plane prior, its budget and its end, and the
+backdrop prior."""
 
 from dataclasses import replace
 
@@ -7,7 +8,15 @@ import pytest
 import torch
 
 import morphosim_gym as ms
-from morphosim_gym.reconstruct.completion import _near_cameras, complete, fit_ground_plane, ground_reach
+from morphosim_gym.language.vocabulary import word_to_setting
+from morphosim_gym.reconstruct.completion import (
+    _near_cameras,
+    complete,
+    find_backdrop,
+    fit_backdrop_plane,
+    fit_ground_plane,
+    ground_reach,
+)
 from morphosim_gym.reconstruct.initialize import initialize
 
 SMALL = ms.GenerationConfig(width=48, height=48, num_frames=9, detail=0.5)
@@ -93,3 +102,68 @@ def test_ground_ends_where_the_views_show_it_end(clip):
     # seen only near the objects, the free space bounds it: past the disc, not far past
     assert radius < ground_reach(fish, up, 0.0, e1, e2, np.zeros(2), seen=0.2 * radius) < 2.0 * radius
     assert ground_reach(clip, up, 0.0, e1, e2, np.zeros(2), seen=radius) > 3.0 * radius
+
+
+def test_backdrop_plane_fit_ignores_outliers():
+    rng = np.random.default_rng(0)
+    n_true = np.array([0.3, -1.0, 0.0]) / np.linalg.norm([0.3, -1.0])
+    along = np.array([-n_true[1], n_true[0], 0.0])
+    wall = 4.0 * n_true + rng.uniform(-5, 5, (300, 1)) * along + rng.uniform(0, 2, (300, 1)) * [0.0, 0.0, 1.0]
+    clutter = rng.uniform(-5, 5, (100, 3))               # rocks and plants in front of it
+    n, d, inliers = fit_backdrop_plane(np.concatenate([wall, clutter]), rng)
+    assert abs(n[2]) == 0.0 and abs(np.dot(n, n_true)) > 0.999 and abs(abs(d) - 4.0) < 0.01
+    assert inliers[:300].all() and inliers[300:].sum() < 10
+    with pytest.raises(ValueError, match="at least 2 points"):
+        fit_backdrop_plane(wall[:1], rng)
+
+
+@pytest.fixture(scope="module")
+def mug():
+    sim = ms.MorphoSim(generation=SMALL, reconstruction="oracle")
+    return sim.generate_clip("a blue mug slides slowly across the table from left to right", seed=0)
+
+
+def _background(clip):
+    return {i for i, name in clip.labels.items() if word_to_setting(name.lower())}
+
+
+def test_backdrop_continues_sideways_up_to_the_height_seen(mug):
+    """The table's wall, seen only behind the mug, continues on both sides (a novel view turned
+    sideways finds wall, not the void), on its plane, no higher than it was seen, in its colour."""
+    model = initialize(mug, seed=0).model
+    backdrop = find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0))
+    assert backdrop is not None and abs(backdrop.normal[1]) > 0.99     # the generator's wall faces -y
+    with torch.no_grad():
+        seen = model.means.numpy()[backdrop.inliers]
+        seen_rgb = model.colors().numpy()[backdrop.inliers]
+    with torch.no_grad():
+        centre = np.median(model.means.numpy()[model.object_ids.numpy() == 1], axis=0)
+        before = model.means.numpy()[model.object_ids.numpy() == 0]
+    first = len(model.means)
+    counts = complete(model, mug, {0: False, 1: True}, seed=0)
+    assert counts["backdrop"] > 0
+    # the ground ends not far behind the wall (the table's disc, seen up to its edge, is no farther)
+    with torch.no_grad():
+        ground = model.means.numpy()[first:first + counts["ground"]]
+    seen_reach = np.linalg.norm(before[:, :2] - centre[:2], axis=1).max()
+    assert np.linalg.norm(ground[:, :2] - centre[:2], axis=1).max() < 1.1 * max(1.5 * backdrop.distance, seen_reach)
+    start = len(model.means) - counts["symmetry"] - counts["backdrop"]
+    with torch.no_grad():
+        added = model.means.numpy()[start:start + counts["backdrop"]]
+        rgb = model.colors().numpy()[start:start + counts["backdrop"]]
+    assert np.all(np.abs(added @ backdrop.normal - backdrop.offset) < 0.05)
+    width = np.ptp(seen[:, 0])
+    assert added[:, 0].min() < seen[:, 0].min() - 0.5 * width and added[:, 0].max() > seen[:, 0].max() + 0.5 * width
+    assert added[:, 2].max() < seen[:, 2].max() + 0.05 * width
+    assert np.abs(np.median(rgb, 0) - np.median(seen_rgb, 0)).max() < 0.1
+    assert model.object_ids[start:start + counts["backdrop"]].unique().tolist() == sorted(_background(mug))
+
+
+def test_sideways_gaussians_off_any_plane_are_no_backdrop(mug):
+    model = initialize(mug, seed=0).model
+    backdrop = find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0))
+    with torch.no_grad():                            # scatter the wall over the room
+        lo, hi = model.means.min(0).values, model.means.max(0).values
+        g = torch.Generator().manual_seed(0)
+        model.means[backdrop.inliers] = lo + (hi - lo) * torch.rand(len(backdrop.inliers), 3, generator=g)
+    assert find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0)) is None
