@@ -34,7 +34,7 @@ from ..scene import GeneratedClip
 from .model import DynamicGaussians, inverse_sigmoid, quat_to_rotmat
 
 __all__ = ["Backdrop", "complete", "find_backdrop", "fit_backdrop_plane", "fit_ground_plane", "ground_reach",
-           "visible_weights"]
+           "seen_through", "visible_weights"]
 
 
 def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 200,
@@ -253,16 +253,17 @@ class Backdrop:
 def find_backdrop(model: DynamicGaussians, dynamic: dict, background: set[int], rng: np.random.Generator,
                   min_inliers: int = 200, min_share: float = 0.6) -> Backdrop | None:
     """The backdrop of a fitted model, if it has one: a vertical plane (`fit_backdrop_plane`) through
-    at least `min_inliers` of the static, opaque Gaussians that face sideways, and at least
-    `min_share` of them (sideways Gaussians scattered over rocks or plants fit no plane)."""
+    at least `min_inliers` of the setting's (`background` ids) static, opaque Gaussians that face
+    sideways, and at least `min_share` of them (sideways Gaussians scattered over rocks or
+    dunes fit no plane). Objects, even static ones (seaweed, a house), are never a backdrop."""
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
         ids = model.object_ids.numpy()
         opac = model.opacities().numpy()
-    static_ids = [i for i, d in dynamic.items() if not d]
+    setting = [i for i, d in dynamic.items() if not d and i in background]
     objects = ~np.isin(ids, list(background)) & (opac > 0.5)
-    cand = np.flatnonzero(np.isin(ids, static_ids) & (np.abs(normals[:, 2]) < 0.3) & (opac > 0.5))
+    cand = np.flatnonzero(np.isin(ids, setting) & (np.abs(normals[:, 2]) < 0.3) & (opac > 0.5))
     if len(cand) < min_inliers or not objects.any():
         return None
     n, d, inl = fit_backdrop_plane(means[cand], rng)
@@ -274,15 +275,15 @@ def find_backdrop(model: DynamicGaussians, dynamic: dict, background: set[int], 
     return Backdrop(n, d, cand[inl], float(n @ centre - d))
 
 
-def _complete_backdrop(model: DynamicGaussians, backdrop: Backdrop, rng: np.random.Generator, max_new: int,
-                       spread: float = 0.75, window: float = 0.1) -> int:
+def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: Backdrop, rng: np.random.Generator,
+                       max_new: int, spread: float = 0.75, window: float = 0.1) -> int:
     """Continue the backdrop sideways, along its plane, by `spread` of its seen width on either
     side, and fill the holes in what was seen (behind the objects). Within the seen width the
     top follows the highest point seen within `window` of the seen width; beyond it, the median
     of those tops (a wall keeps its edge, hills their typical height rather than the last
     peak). The bottom is the lowest point seen. Each disc takes the colour of the nearest seen
-    backdrop Gaussian; the cells grow where more than `max_new` would be needed. Returns how
-    many discs were added."""
+    backdrop Gaussian; the cells grow where more than `max_new` would be needed. Discs that an
+    input view sees through (`seen_through`) are left out. Returns how many discs were added."""
     with torch.no_grad():
         means = model.means.numpy().astype(np.float64)
         ids = model.object_ids.numpy()
@@ -329,14 +330,34 @@ def _complete_backdrop(model: DynamicGaussians, backdrop: Backdrop, rng: np.rand
     if len(pu) > max_new:                                    # keep those nearest the seen backdrop
         order = np.argsort(np.abs(pu - np.clip(pu, uv[:, 0].min(), uv[:, 0].max())), kind="stable")[:max_new]
         rows, cols, pu, pv = rows[order], cols[order], pu[order], pv[order]
-    if not len(pu):
-        return 0
     src = on[_nearest_source(uv, lo, size, cell)[rows, cols]]
     jitter = 0.3 * (rng.random((len(pu), 2)) - 0.5) * cell
     pts = (pu + jitter[:, 0])[:, None] * e1 + (pv + jitter[:, 1])[:, None] * e2 + backdrop.offset * n
+    hidden = ~seen_through(pts, clip)              # an input view sees past it: no backdrop there
+    pts, src = pts[hidden], src[hidden]
+    if not len(pts):
+        return 0
     label = int(np.bincount(ids[on]).argmax())
     _append_discs(model, pts, n, np.full(len(pts), cell), colors[src], label, rng)
     return len(pts)
+
+
+def seen_through(points: np.ndarray, clip: GeneratedClip, margin: float = 0.15, frame_stride: int = 4) -> np.ndarray:
+    """[n] whether an input view sees through each of `points` [n, 3]: in some frame (every
+    `frame_stride`-th) it lies in view, in front of the camera, on a pixel whose depth prior
+    shows nothing or lies more than `margin` (relative) beyond it. False everywhere without depth."""
+    through = np.zeros(len(points), bool)
+    if clip.depth is None or not len(points):
+        return through
+    for f in range(0, clip.num_frames, max(1, frame_stride)):
+        cam = clip.cameras[f]
+        uv, z = cam.project(points)
+        col, row = np.floor(uv[:, 0]), np.floor(uv[:, 1])
+        inside = (z > cam.near) & (col >= 0) & (col < cam.width) & (row >= 0) & (row < cam.height)
+        idx = np.flatnonzero(inside)
+        seen = clip.depth[f][row[idx].astype(int), col[idx].astype(int)]
+        through[idx] |= (seen <= 0) | (seen > z[idx] * (1.0 + margin))
+    return through
 
 
 def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, rng: np.random.Generator,
@@ -596,7 +617,7 @@ def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: 
     wall = 0
     if backdrop is not None:
         first = model.num
-        _complete_backdrop(model, backdrop, rng, max_backdrop)
+        _complete_backdrop(model, clip, backdrop, rng, max_backdrop)
         wall = _split_near(model, clip, first)
     first = model.num
     _complete_symmetry(model, clip, dynamic, reference, background)

@@ -16,6 +16,7 @@ from morphosim_gym.reconstruct.completion import (
     fit_backdrop_plane,
     fit_ground_plane,
     ground_reach,
+    seen_through,
 )
 from morphosim_gym.reconstruct.initialize import initialize
 
@@ -162,8 +163,22 @@ def test_backdrop_continues_sideways_up_to_the_height_seen(mug):
 def test_sideways_gaussians_off_any_plane_are_no_backdrop(mug):
     model = initialize(mug, seed=0).model
     backdrop = find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0))
+    # a static object is never a backdrop, however flat (the wall, were it not the setting's)
+    assert find_backdrop(model, {0: False, 1: True}, set(), np.random.default_rng(0)) is None
     with torch.no_grad():                            # scatter the wall over the room
         lo, hi = model.means.min(0).values, model.means.max(0).values
         g = torch.Generator().manual_seed(0)
         model.means[backdrop.inliers] = lo + (hi - lo) * torch.rand(len(backdrop.inliers), 3, generator=g)
     assert find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0)) is None
+
+
+def test_points_an_input_view_sees_past_are_seen_through(mug):
+    cam, depth = mug.cameras[0], mug.depth[0]
+    rows, cols = np.nonzero((depth > 0) & np.isin(mug.masks[0], list(_background(mug))))   # the still table and wall
+    uv = np.c_[cols, rows] + 0.5
+    front = cam.unproject(uv, 0.5 * depth[rows, cols])      # in the free space the view looks through
+    behind = cam.unproject(uv, 1.5 * depth[rows, cols])     # hidden behind the surface the view shows
+    assert seen_through(front, mug).mean() > 0.95
+    assert not seen_through(behind, mug).any()
+    assert not seen_through(cam.position - 5.0 * cam.forward[None], mug).any()    # behind every camera
+    assert not seen_through(front, replace(mug, depth=None)).any()
