@@ -474,7 +474,8 @@ def test_async_vector_env():
 def test_render_mode_and_record_video(tmp_path):
     pytest.importorskip("moviepy")
     env = make("MorphoSim/Track-v0", render_mode="rgb_array", render_width=64, render_height=48, control_hz=2.0)
-    env = gym.wrappers.RecordVideo(env, str(tmp_path), episode_trigger=lambda e: True, disable_logger=True)
+    videos = tmp_path / "videos"                      # a new folder: the wrapper warns on an existing one
+    env = gym.wrappers.RecordVideo(env, str(videos), episode_trigger=lambda e: True, disable_logger=True)
     env.reset(seed=0)
     frame = env.render()
     assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8
@@ -483,7 +484,7 @@ def test_render_mode_and_record_video(tmp_path):
         if term or trunc:
             break
     env.close()
-    assert list(tmp_path.glob("*.mp4"))
+    assert list(videos.glob("*.mp4"))
 
 
 def test_rgb_observation_wrapper():
