@@ -155,8 +155,7 @@ class Selector:
         names = [o.name for o in scene.objects]
         prompts = names + [query]
         emb = embeddings.embed(prompts)                                       # [P, 384]
-        decoded = scene.decoders["semantic"](scene.gaussians.features)         # [N, 384], normalised
-        s = decoded @ emb.T / self.temperature
+        s = scene.decoders["semantic"].similarity(scene.gaussians.features, emb) / self.temperature   # [N, P] cosine
         s -= s.max(axis=1, keepdims=True)
         p = np.exp(s)
         p /= p.sum(axis=1, keepdims=True)

@@ -31,8 +31,8 @@ def semantic_precision_recall(scene: Scene4D) -> dict[str, dict[str, float]]:
         raise ValueError("Expected a scene with a semantic feature field, found none")
     names = [o.name for o in scene.objects]
     emb = embeddings.embed(names)
-    decoded = scene.decoders["semantic"](scene.gaussians.features)
-    pred = np.asarray([scene.objects[k].id for k in np.argmax(decoded @ emb.T, axis=1)])
+    similarity = scene.decoders["semantic"].similarity(scene.gaussians.features, emb)
+    pred = np.asarray([scene.objects[k].id for k in np.argmax(similarity, axis=1)])
     truth = scene.gaussians.object_ids
     out = {}
     for o in scene.objects:
