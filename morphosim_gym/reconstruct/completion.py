@@ -307,7 +307,9 @@ def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: B
     cell = max(float(np.median(scales[on, :2])) * 3.0, float((hi - lo).max()) / 2048.0)
     for _ in range(12):
         size = np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)
-        empty = ~_occupancy(ouv, scales[near].max(1), lo, size, cell)
+        # a Gaussian covers the backdrop over its narrower in-plane side: a long thin streak
+        # (a wrongly stretched Gaussian) does not hide the empty wall around it
+        empty = ~_occupancy(ouv, scales[near, :2].min(1), lo, size, cell)
         rows, cols = np.nonzero(empty)
         pu, pv = lo[0] + (cols + 0.5) * cell, lo[1] + (rows + 0.5) * cell
         # the top: per column of cells, the highest point seen within `window` of it (the views

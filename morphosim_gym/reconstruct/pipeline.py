@@ -32,7 +32,7 @@ from .lifting import estimate_background_color
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 6      # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 7      # bumped when the method changes, so older results are fitted again
 
 
 @dataclass(frozen=True)
