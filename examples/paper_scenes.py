@@ -3,7 +3,7 @@
     python examples/paper_scenes.py --out out/demo [--reconstruct] [--size 128]
 
 For each prompt of the paper's figures this writes `NN_name.mp4`: the generation view (left) and
-a 30-degree novel view (right), before (top) and after (bottom) the paper's edit of that scene. With `--reconstruct` scenes are fitted from their clips (40-80 s
+a 30-degree novel view (right), before (top) and after (bottom) the paper's edit of that scene. With `--reconstruct` scenes are fitted from their clips (40-70 s
 each at 128 px on a 2-core CPU) instead of taken from the generator's ground truth.
 """
 
