@@ -42,8 +42,7 @@ def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 
     """RANSAC plane n . x = d (n pointing up) through `points` [n, 3]; returns (n, d, inlier mask)."""
     if len(points) < 3:
         raise ValueError(f"Expected at least 3 points to fit a plane, found {len(points)}")
-    scale = float(np.ptp(points, axis=0).max()) or 1.0
-    tol = tolerance if tolerance is not None else 0.01 * scale
+    tol = _tolerance(points, tolerance)
     best = (np.array([0.0, 0.0, 1.0]), float(np.median(points[:, 2])), np.zeros(len(points), bool))
     for _ in range(iters):
         p = points[rng.choice(len(points), 3, replace=False)]
@@ -69,6 +68,11 @@ def fit_ground_plane(points: np.ndarray, rng: np.random.Generator, iters: int = 
     return n, d, inl
 
 
+def _tolerance(points: np.ndarray, tolerance: float | None) -> float:
+    """The inlier distance of a plane fit: `tolerance`, or 1% of the points' largest extent."""
+    return tolerance if tolerance is not None else 0.01 * (float(np.ptp(points, axis=0).max()) or 1.0)
+
+
 def _least_squares_normal(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(unit normal, centroid) of the least-squares plane (or line, in 2D) through `points`."""
     c = points.mean(0)
@@ -81,8 +85,7 @@ def fit_backdrop_plane(points: np.ndarray, rng: np.random.Generator, iters: int 
     """RANSAC vertical plane n . x = d (n horizontal) through `points` [n, 3]; returns (n, d, inlier mask)."""
     if len(points) < 2:
         raise ValueError(f"Expected at least 2 points to fit a vertical plane, found {len(points)}")
-    scale = float(np.ptp(points, axis=0).max()) or 1.0
-    tol = tolerance if tolerance is not None else 0.01 * scale
+    tol = _tolerance(points, tolerance)
     xy = points[:, :2]
     best = (np.array([0.0, 1.0, 0.0]), float(np.median(points[:, 1])), np.zeros(len(points), bool))
     for _ in range(iters):
@@ -239,6 +242,26 @@ def _append(model: DynamicGaussians, means, quats, scales, opacities, colors, id
 
 
 @dataclass(frozen=True)
+class _Arrays:
+    """A read-only numpy copy of a model's Gaussians (`_arrays`), which the priors measure."""
+
+    means: np.ndarray       # [N, 3] float64
+    quats: np.ndarray       # [N, 4] float64
+    normals: np.ndarray     # [N, 3] each Gaussian's third (thinnest, for discs) axis
+    ids: np.ndarray         # [N]
+    colors: np.ndarray      # [N, 3]
+    scales: np.ndarray      # [N, 3]
+    opac: np.ndarray        # [N]
+
+
+def _arrays(model: DynamicGaussians) -> _Arrays:
+    with torch.no_grad():
+        return _Arrays(model.means.numpy().astype(np.float64), model.quats.numpy().astype(np.float64),
+                       quat_to_rotmat(model.quats).numpy()[:, :, 2], model.object_ids.numpy(),
+                       model.colors().numpy(), model.scales().numpy(), model.opacities().numpy())
+
+
+@dataclass(frozen=True)
 class Backdrop:
     """A vertical plane normal . x = offset behind the objects (hills, a wall): `normal` is
     horizontal and points towards the objects, `inliers` index the model's Gaussians on it and
@@ -256,11 +279,8 @@ def find_backdrop(model: DynamicGaussians, dynamic: dict, background: set[int], 
     at least `min_inliers` of the setting's (`background` ids) static, opaque Gaussians that face
     sideways, and at least `min_share` of them (sideways Gaussians scattered over rocks or
     dunes fit no plane). Objects, even static ones (seaweed, a house), are never a backdrop."""
-    with torch.no_grad():
-        means = model.means.numpy().astype(np.float64)
-        normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
-        ids = model.object_ids.numpy()
-        opac = model.opacities().numpy()
+    a = _arrays(model)
+    means, normals, ids, opac = a.means, a.normals, a.ids, a.opac
     setting = [i for i, d in dynamic.items() if not d and i in background]
     objects = ~np.isin(ids, list(background)) & (opac > 0.5)
     cand = np.flatnonzero(np.isin(ids, setting) & (np.abs(normals[:, 2]) < 0.3) & (opac > 0.5))
@@ -284,12 +304,8 @@ def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: B
     peak). The bottom is the lowest point seen. Each disc takes the colour of the nearest seen
     backdrop Gaussian; the cells grow where more than `max_new` would be needed. Discs that an
     input view sees through (`seen_through`) are left out. Returns how many discs were added."""
-    with torch.no_grad():
-        means = model.means.numpy().astype(np.float64)
-        ids = model.object_ids.numpy()
-        colors = model.colors().numpy()
-        scales = model.scales().numpy()
-        opac = model.opacities().numpy()
+    a = _arrays(model)
+    means, ids, colors, scales, opac = a.means, a.ids, a.colors, a.scales, a.opac
     n, on = backdrop.normal, backdrop.inliers
     e1 = np.cross(n, [0.0, 0.0, 1.0])
     e1 /= np.linalg.norm(e1)
@@ -297,8 +313,7 @@ def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: B
     uv = np.c_[means[on] @ e1, means[on] @ e2]
     lo, hi = uv.min(0), uv.max(0)
     lo[0], hi[0] = lo[0] - spread * (hi[0] - lo[0]), hi[0] + spread * (hi[0] - lo[0])
-    with torch.no_grad():
-        facing = np.abs(quat_to_rotmat(model.quats).numpy()[:, :, 2] @ n) > 0.7
+    facing = np.abs(a.normals @ n) > 0.7
     # what covers the backdrop: Gaussians on it that face the same way (not the ground's discs
     # meeting it, whose footprint would cover the backdrop's plane above and below them)
     near = np.flatnonzero((np.abs(means @ n - backdrop.offset) < 3.0 * float(np.median(scales[on].max(1))))
@@ -368,13 +383,8 @@ def _complete_ground(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict
     """Tile the ground plane around what was seen (module docstring); returns how many discs were
     added. With a backdrop, the ground reaches at most `backdrop_slack` times the backdrop's
     distance from the objects (or as far as it was seen)."""
-    with torch.no_grad():
-        means = model.means.numpy().astype(np.float64)
-        normals = quat_to_rotmat(model.quats).numpy()[:, :, 2]
-        ids = model.object_ids.numpy()
-        colors = model.colors().numpy()
-        scales = model.scales().numpy()
-        opac = model.opacities().numpy()
+    a = _arrays(model)
+    means, normals, ids, colors, scales, opac = a.means, a.normals, a.ids, a.colors, a.scales, a.opac
     static_ids = [i for i, d in dynamic.items() if not d]
     cand = np.isin(ids, static_ids) & (np.abs(normals[:, 2]) > 0.8) & (opac > 0.5)
     if cand.sum() < 50:
@@ -548,13 +558,8 @@ def _quat_from_normal(n: np.ndarray) -> np.ndarray:
 
 def _complete_symmetry(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, reference: dict | None,
                        background: set[int]) -> int:
-    with torch.no_grad():
-        means = model.means.numpy().astype(np.float64)
-        quats = model.quats.numpy().astype(np.float64)
-        ids = model.object_ids.numpy()
-        colors = model.colors().numpy()
-        scales = model.scales().numpy()
-        opac = model.opacities().numpy()
+    a = _arrays(model)
+    means, quats, ids, colors, scales, opac = a.means, a.quats, a.ids, a.colors, a.scales, a.opac
     added = 0
     new = {k: [] for k in ("means", "quats", "scales", "opacities", "colors", "ids")}
     for inst in sorted(set(ids.tolist()) - background):
