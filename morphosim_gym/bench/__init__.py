@@ -8,10 +8,8 @@ Command line: `morphosim bench SUITE --policy oracle --out DIR`, `morphosim qual
 """
 
 from .episode import EpisodeKey, EpisodeRunner
-from .policies import BUILTIN_POLICIES, load_policy, oracle_policy, random_policy
 from .runner import SweepResult, plan_episodes, run_sweep
 from .suite import CameraShift, Perturbation, Suite, SuiteError, builtin_suite_names, load_suite
 
 __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "builtin_suite_names", "run_sweep",
-           "SweepResult", "plan_episodes", "EpisodeKey", "EpisodeRunner", "load_policy", "random_policy",
-           "oracle_policy", "BUILTIN_POLICIES"]
+           "SweepResult", "plan_episodes", "EpisodeKey", "EpisodeRunner"]

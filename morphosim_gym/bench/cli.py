@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..policies import POLICY_SPEC_HELP
+
 __all__ = ["register", "exit_code", "MAX_EXIT_FAILED", "EXIT_NOT_RUN"]
 
 MAX_EXIT_FAILED = 250      # exit status = failed episodes, capped here (statuses wrap at 256)
@@ -29,8 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("suite", nargs="?", default=None,
                    help="a built-in suite name (see --list) or a suite YAML file")
     p.add_argument("--policy", action="append", default=None, metavar="SPEC",
-                   help="'oracle', 'random', or module:callable, a factory(env, seed) -> act(obs, info) "
-                        "(repeatable; default: oracle)")
+                   help=f"{POLICY_SPEC_HELP} (repeatable; default: oracle)")
     p.add_argument("--backend", choices=["local", "ray"], default="local", help="where episodes run")
     p.add_argument("--workers", type=int, default=1,
                    help="worker processes (local: a process pool when > 1; ray: actors on the cluster)")

@@ -16,8 +16,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..policies import resolve_policy
 from .perturb import camera_option, resolve_edits, sample_episode, template_values
-from .policies import load_policy
 from .suite import Suite
 
 __all__ = ["EpisodeKey", "EpisodeResult", "EpisodeRunner", "STAGES", "make_sim"]
@@ -152,7 +152,7 @@ class EpisodeRunner:
         except ValueError as exc:
             raise _Failure("perturbation" if edits and pert.at == 0 else "env", _text(exc)) from None
         try:
-            act = load_policy(key.policy)(env, key.seed)
+            act = resolve_policy(key.policy)(env, key.seed)
         except Exception as exc:
             raise _Failure("policy", f"the policy factory raised {_text(exc)}") from None
         return self._loop(env, act, obs, info, pert.at, edits, frames, record)

@@ -20,10 +20,10 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from ..policies import resolve_policy
 from .backends import BACKENDS, Job, run_backend
 from .episode import EpisodeKey, EpisodeRunner
 from .layout import MANIFEST, RESULTS_LOG, frames_path
-from .policies import load_policy
 from .report import write_outputs
 from .stats import ConditionSummary, summarize
 from .store import ResultStore, atomic_write_bytes
@@ -92,7 +92,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
     if not policies or len(set(policies)) != len(policies):
         raise ValueError(f"Expected one or more distinct policies, found {list(policies)!r}")
     for spec in policies:
-        load_policy(spec)                              # an unknown policy stops the sweep before it starts
+        resolve_policy(spec)                            # an unknown policy stops the sweep before it starts
     _check_env(suite, cache_dir)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -13,10 +13,10 @@ from .worker import FrameWorker
 __all__ = [
     "ViewerSession", "LogEntry", "Snapshot", "format_log", "resize_keep_fov", "resolve_source",
     "camera_from_viewer", "viewer_pose", "viewer_view", "render_size",
-    "FrameWorker", "SceneViewer", "EnvViewer", "EnvRunner", "make_policy",
+    "FrameWorker", "SceneViewer", "EnvViewer", "EnvRunner",
 ]
 
-_LAZY = {"SceneViewer": "app", "EnvViewer": "env_app", "EnvRunner": "env_app", "make_policy": "env_app"}
+_LAZY = {"SceneViewer": "app", "EnvViewer": "env_app", "EnvRunner": "env_app"}
 
 
 def __getattr__(name: str):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..policies import POLICY_SPEC_HELP, resolve_policy
+
 __all__ = ["register"]
 
 
@@ -21,8 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                    help="with --env: a keyword argument of gym.make, value read as YAML (repeatable), "
                         "e.g. --env-option detail=1.0")
-    p.add_argument("--policy", default="random",
-                   help="with --env: 'random' (default), 'zero', or 'module:function' taking (obs, action_space)")
+    p.add_argument("--policy", default="random", metavar="SPEC",
+                   help=f"with --env: {POLICY_SPEC_HELP} (default: random)")
     p.add_argument("--episodes", type=int, default=0, help="with --env: stop after this many episodes (0: never)")
     p.add_argument("--seed", type=int, default=0, help="seed of generated scenes (and of env resets)")
     p.add_argument("--reconstruction", choices=["oracle", "fit"], default="oracle",
@@ -45,9 +47,10 @@ def _view(args: argparse.Namespace) -> int:
         raise ValueError("Expected a scene file, a directory or a prompt to view (or --env ID), found none")
     if args.env is not None:
         from .app import import_viser
-        from .env_app import EnvViewer, make_policy
+        from .env_app import EnvViewer
 
         import_viser()
+        policy = resolve_policy(args.policy)        # a bad spec fails before the env is made
         kwargs = _env_options(args.env_option)
         if args.source is not None:
             kwargs["prompt"] = args.source
@@ -56,7 +59,7 @@ def _view(args: argparse.Namespace) -> int:
         if args.reconstruction != "oracle":
             kwargs.setdefault("reconstruction", args.reconstruction)
         print(f"morphosim view: making {args.env} ...", flush=True)
-        viewer = EnvViewer(args.env, policy=make_policy(args.policy, args.seed), seed=args.seed,
+        viewer = EnvViewer(args.env, policy=policy, seed=args.seed,
                            episodes=args.episodes, env_kwargs=kwargs, host=args.host, port=args.port,
                            long_side=args.resolution, verbose=not args.quiet)
         print(f"morphosim view: {args.env} with the {args.policy} policy at {viewer.url} (Ctrl-C to stop)",

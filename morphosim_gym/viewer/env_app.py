@@ -9,63 +9,30 @@ The page shows, live while a policy acts:
   * play / pause, one step, a new episode, steps per second, and a box for language edits applied
     to the running episode (`env.unwrapped.perturb`, where the env has it).
 
-Policies are callables `policy(obs, action_space) -> action`: `make_policy("random")` (seeded
-samples of the action space, the default), `"zero"`, or `"module:function"`.
+Policies follow the one protocol of `morphosim_gym.policies` (as in `morphosim bench`): a factory
+`factory(env, seed) -> act(obs, info) -> action`, called once per episode with its reset seed, named
+by anything `resolve_policy` takes: a built-in ("random", the default, "zero", "oracle", "color"),
+"module:callable", or the factory itself.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 import threading
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 import numpy as np
 
+from ..policies import Act, PolicyFactory, resolve_policy
 from ..scene import Camera, Gaussians
 from .camera import camera_from_viewer, render_size, viewer_pose, viewer_view
 from .session import md_escape
 from .lifecycle import ServedViewer
 from .worker import FrameWorker
 
-__all__ = ["EnvViewer", "EnvRunner", "StepRecord", "make_policy", "POLICIES"]
-
-POLICIES = ("random", "zero", "module:function")
-Policy = Callable[[Any, Any], Any]
-
-
-def make_policy(spec: str | Policy, seed: int = 0) -> Policy:
-    """A policy from its name: "random" (uniform samples of the action space, seeded), "zero"
-    (all-zero actions), or "package.module:function" (a callable taking (obs, action_space))."""
-    if callable(spec):
-        return spec
-    if not isinstance(spec, str) or not spec.strip():
-        raise ValueError(f"Expected a policy in {POLICIES}, found {spec!r}")
-    if spec == "random":
-        seeded: dict[int, bool] = {}
-
-        def random_policy(obs: Any, action_space: Any) -> Any:
-            if id(action_space) not in seeded:
-                action_space.seed(seed)
-                seeded[id(action_space)] = True
-            return action_space.sample()
-
-        return random_policy
-    if spec == "zero":
-        return lambda obs, action_space: np.zeros(action_space.shape, dtype=action_space.dtype)
-    if ":" in spec:
-        module, _, name = spec.partition(":")
-        try:
-            fn = getattr(importlib.import_module(module), name)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"Expected a policy 'module:function' that can be imported, found {spec!r} ({exc})") \
-                from exc
-        if not callable(fn):
-            raise ValueError(f"Expected {spec!r} to be a callable policy, found {type(fn).__name__}")
-        return fn
-    raise ValueError(f"Expected a policy in {POLICIES}, found {spec!r}")
+__all__ = ["EnvViewer", "EnvRunner", "StepRecord"]
 
 
 @dataclass(frozen=True)
@@ -108,17 +75,19 @@ class EnvRunner:
 
     Args:
         env: a Gymnasium env, or an env id for `gym.make` (with `render_mode="rgb_array"`).
-        policy: see `make_policy`.
+        policy: a policy spec or factory (see `morphosim_gym.policies.resolve_policy`); its factory is
+            called after every reset with the env and that reset's seed.
         seed: seed of the first reset (episode k is reset with seed + k - 1).
         env_kwargs: keyword arguments for `gym.make`.
     """
 
-    def __init__(self, env: Any, policy: str | Policy = "random", seed: int = 0,
+    def __init__(self, env: Any, policy: str | PolicyFactory = "random", seed: int = 0,
                  env_kwargs: Optional[dict] = None) -> None:
         import gymnasium as gym
 
         import morphosim_gym  # noqa: F401  (registers the MorphoSim envs)
 
+        self.factory = resolve_policy(policy)       # before making the env: a bad spec fails at once
         if isinstance(env, str):
             if env not in gym.registry:
                 known = sorted(k for k in gym.registry if k.startswith("MorphoSim/"))
@@ -126,7 +95,7 @@ class EnvRunner:
             env = gym.make(env, render_mode="rgb_array", **dict(env_kwargs or {}))
         self.env = env
         self.env_id = getattr(getattr(env, "spec", None), "id", None) or type(env.unwrapped).__name__
-        self.policy = make_policy(policy, seed)
+        self.act: Optional[Act] = None
         self.seed = int(seed)
         self.lock = threading.RLock()
         self.episode = 0
@@ -141,7 +110,9 @@ class EnvRunner:
         """Start the next episode."""
         with self.lock:
             self.episode += 1
-            obs, info = self.env.reset(seed=self.seed + self.episode - 1)
+            seed = self.seed + self.episode - 1
+            obs, info = self.env.reset(seed=seed)
+            self.act = self.factory(self.env, seed)
             self.rewards = []
             return self._set(StepRecord(self.episode, 0, obs, 0.0, 0.0, False, False, dict(info), 0))
 
@@ -151,7 +122,7 @@ class EnvRunner:
             if self.record is not None and self.record.done:
                 return self.reset()
             rec = self.record
-            action = self.policy(rec.obs, self.env.action_space)
+            action = self.act(rec.obs, rec.info)
             obs, reward, terminated, truncated, info = self.env.step(action)
             self.rewards.append(float(reward))
             return self._set(StepRecord(rec.episode, rec.step + 1, obs, float(reward),
@@ -264,7 +235,8 @@ class EnvViewer(ServedViewer):
 
     Args:
         env: an env id (or a Gymnasium env).
-        policy: "random" (default), "zero", "module:function" or a callable (see `make_policy`).
+        policy: a built-in ("random", the default, "zero", "oracle", "color"), "module:callable" or a
+            factory (see `EnvRunner`).
         seed: seed of the first episode.
         episodes: stop playing after this many episodes (0: keep going).
         env_kwargs: keyword arguments for `gym.make`.
@@ -273,7 +245,7 @@ class EnvViewer(ServedViewer):
         autoplay: start playing at once.
     """
 
-    def __init__(self, env: Any, policy: str | Policy = "random", *, seed: int = 0, episodes: int = 0,
+    def __init__(self, env: Any, policy: str | PolicyFactory = "random", *, seed: int = 0, episodes: int = 0,
                  env_kwargs: Optional[dict] = None, host: str = "127.0.0.1", port: int = 8080, long_side: int = 512,
                  jpeg_quality: int = 85, steps_per_second: Optional[float] = None, autoplay: bool = True,
                  verbose: bool = True) -> None:

@@ -2,7 +2,8 @@
 
 import pytest
 
-from morphosim_gym.bench import EpisodeKey, EpisodeRunner, load_policy, load_suite
+from morphosim_gym.bench import EpisodeKey, EpisodeRunner, load_suite
+from morphosim_gym.policies import resolve_policy
 
 EPISODES = 20
 
@@ -20,11 +21,11 @@ def test_oracle_succeeds_and_random_fails_on_base_scenes(suite_name, cache_dir):
 
 
 def test_policy_specs():
-    assert callable(load_policy("oracle")) and callable(load_policy("morphosim_gym.bench.policies:random_policy"))
+    assert callable(resolve_policy("oracle")) and callable(resolve_policy("morphosim_gym.policies:random_policy"))
     for spec, word in [("nope", "module:callable"), ("no_such_module_xyz:f", "import"),
-                       ("morphosim_gym.bench.policies:missing", "missing")]:
+                       ("morphosim_gym.policies:missing", "missing")]:
         with pytest.raises(ValueError, match=word):
-            load_policy(spec)
+            resolve_policy(spec)
 
 
 def test_color_policy_sees_the_colour_and_loses_a_recoloured_target(cache_dir):

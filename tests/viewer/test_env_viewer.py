@@ -7,7 +7,8 @@ import pytest
 from gymnasium import spaces
 
 import morphosim_gym  # noqa: F401  (registers the envs, where present)
-from morphosim_gym.viewer.env_app import EnvRunner, EnvViewer, make_policy
+from morphosim_gym.policies import random_policy, resolve_policy
+from morphosim_gym.viewer.env_app import EnvRunner, EnvViewer
 
 HAVE_TRACK = "MorphoSim/Track-v0" in gym.registry
 
@@ -40,9 +41,21 @@ class CountingEnv(gym.Env):
         return np.full((24, 32, 3), 40 * self.n, np.uint8)
 
 
-def forward_policy(obs, action_space):
-    """A policy importable as 'tests.viewer.test_env_viewer:forward_policy'."""
-    return np.array([0.5, 0.0], dtype=np.float32)
+def forward_policy(env, seed):
+    """A policy factory importable as 'tests.viewer.test_env_viewer:forward_policy'."""
+    return lambda obs, info: np.array([0.5, 0.0], dtype=np.float32)
+
+
+class FactoryLog:
+    """A factory that records its calls and the (obs, info) its policy sees."""
+
+    def __init__(self):
+        self.calls, self.seen = [], []
+
+    def __call__(self, env, seed):
+        self.calls.append((env, seed))
+        return lambda obs, info: (self.seen.append((int(obs["rgb"][0, 0, 0]), dict(info))),
+                                  np.zeros(2, np.float32))[1]
 
 
 def test_episodes_run_with_a_policy_and_restart():
@@ -64,21 +77,45 @@ def test_episodes_run_with_a_policy_and_restart():
 def test_random_policy_is_seeded():
     def actions(seed):
         runner = EnvRunner(CountingEnv(), policy="random", seed=seed)
-        return [runner.policy(None, runner.env.action_space) for _ in range(4)]
+        rec = runner.record
+        return [runner.act(rec.obs, rec.info) for _ in range(4)]
 
     np.testing.assert_array_equal(actions(3), actions(3))
     assert not np.array_equal(actions(3), actions(4))
+    # the bench's random policy, from the episode's reset seed
+    env = CountingEnv()
+    bench = random_policy(env, 3)
+    np.testing.assert_array_equal(actions(3), [bench(None, {}) for _ in range(4)])
+
+
+def test_the_factory_is_called_once_per_episode_with_its_reset_seed():
+    log = FactoryLog()
+    runner = EnvRunner(CountingEnv(), policy=log, seed=7)
+    assert runner.factory is log and [s for _, s in log.calls] == [7] and log.calls[0][0] is runner.env
+    for _ in range(6):                                      # five steps, then the reset of episode 2
+        runner.step()
+    assert [s for _, s in log.calls] == [7, 8]
+    assert [n for n, _ in log.seen] == [0, 40, 80, 120, 160]       # each step's act saw the latest obs
+    assert log.seen[0][1]["seed"] == 7 and log.seen[1][1]["reward_main"] == 1.0   # and info (reset's, then step's)
 
 
 def test_policies_by_name():
-    space = spaces.Box(-1.0, 1.0, (3,), np.float32)
-    assert np.all(make_policy("zero")(None, space) == 0)
-    assert space.contains(make_policy("random")(None, space))
-    fn = make_policy("tests.viewer.test_env_viewer:forward_policy")
-    assert fn is forward_policy
+    env = CountingEnv()
+    assert np.all(EnvRunner(env, policy="zero").act(None, {}) == 0)
+    assert env.action_space.contains(EnvRunner(CountingEnv(), policy="random").act(None, {}))
+    runner = EnvRunner(CountingEnv(), policy="tests.viewer.test_env_viewer:forward_policy")
+    assert runner.factory is forward_policy
+    np.testing.assert_array_equal(runner.act(None, {}), [0.5, 0.0])
+    assert resolve_policy("zero") is EnvRunner(CountingEnv(), policy="zero").factory
     for bad in ("", "best", "tests.viewer.test_env_viewer:nothing", "no_such_module:f"):
         with pytest.raises(ValueError, match="policy"):
-            make_policy(bad)
+            EnvRunner(CountingEnv(), policy=bad)
+
+
+def test_task_policies_on_an_env_without_a_task_say_so():
+    for name, who in (("oracle", "oracle"), ("color", "colour")):
+        with pytest.raises(ValueError, match=f"MorphoSim env with a task .* for the {who} policy"):
+            EnvRunner(CountingEnv(), policy=name)
 
 
 def test_unknown_env_id_lists_the_known_ones():
@@ -129,6 +166,29 @@ def test_track_third_person_view_shows_world_and_agent(track_runner):
     eye = next(iter(runner.agent_cameras().values()))
     obs = ms.render(world.gaussians(), eye, background=bg).rgb_uint8()
     assert np.abs(obs.astype(int) - runner.observation_image.astype(int)).mean() < 3
+
+
+@pytest.fixture(scope="module")
+def track_env():
+    if not HAVE_TRACK:
+        pytest.skip("MorphoSim/Track-v0 is not registered in this build")
+    env = gym.make("MorphoSim/Track-v0", prompt="a red ball bounces from right to left", render_mode="rgb_array")
+    yield env
+    env.close()
+
+
+@pytest.mark.parametrize("name", ["oracle", "color"])
+def test_track_runs_the_bench_builtins(track_env, name):
+    """The viewer runs every built-in the bench has, including the task-aware ones."""
+    from morphosim_gym.policies import BUILTIN_POLICIES
+
+    runner = EnvRunner(track_env, policy=name, seed=0)
+    assert runner.factory is BUILTIN_POLICIES[name]
+    recs = [runner.step() for _ in range(8)]
+    assert [r.step for r in recs] == list(range(1, 9)) and not any(r.done for r in recs)
+    assert all(r.info["target_pixels"] > 0 for r in recs)            # both keep the target in view
+    assert sum(r.info["centred"] for r in recs[-4:]) >= 3, [r.info["target_offset"] for r in recs]
+    assert recs[-1].episode_return > 0.5 * len(recs)                 # reward_centred is 0.8 when centred
 
 
 def test_track_language_edit_during_an_episode(track_runner):

@@ -1,4 +1,4 @@
-"""A policy that sees: it finds the target in the image by the colour word of the instruction.
+"""The `color` policy, one that sees: it finds the target in the image by the colour word of the instruction.
 
 Unlike the oracle, it reads only what a camera policy could: the observation's RGB image, the
 instruction in `info`, and the camera intrinsics in `info["cameras"]`. It is the built-in
@@ -16,6 +16,8 @@ import numpy as np
 
 from morphosim_gym.language.colors import color_rgb, is_color_word
 from morphosim_gym.metrics import rgb_to_lab
+
+from .task import task_kind
 
 __all__ = ["color_policy", "colour_mask", "instruction_color", "largest_blob"]
 
@@ -58,7 +60,7 @@ def _angles(mask: np.ndarray, k: np.ndarray) -> tuple[float, float, float]:
 class _ColorPolicy:
     def __init__(self, env: Any) -> None:
         self.env = env.unwrapped
-        self.kind = self.env.task.kind
+        self.kind = task_kind(env, "the colour policy")
         if self.kind not in ("track", "find"):
             raise ValueError(f"Expected a Track or Find env for the colour policy, found task kind {self.kind!r}")
         self.dt = float(self.env.dt)

@@ -1,4 +1,4 @@
-"""Scripted oracle controllers: one per task kind, reading the true target position from the env.
+"""The `oracle` policy: a scripted controller per task kind, reading the true target position from the env.
 
 They are yardsticks, not learners: each reads `env.unwrapped.world.target_position(t)` (the
 ground truth of the scene, after any edit) and the rig's state, and steers with a simple
@@ -14,7 +14,9 @@ from typing import Any, Optional
 
 import numpy as np
 
-__all__ = ["TrackOracle", "ReachOracle", "FindOracle", "ORACLES", "make_oracle"]
+from .task import task_kind
+
+__all__ = ["oracle_policy", "TrackOracle", "ReachOracle", "FindOracle", "ORACLES", "make_oracle"]
 
 
 def _unit_clip(v: np.ndarray) -> np.ndarray:
@@ -142,7 +144,12 @@ ORACLES = {"track": TrackOracle, "reach": ReachOracle, "find": FindOracle}
 
 def make_oracle(env: Any) -> _Oracle:
     """The oracle of the env's task kind."""
-    kind = env.unwrapped.task.kind
+    kind = task_kind(env, "the oracle policy")
     if kind not in ORACLES:
         raise ValueError(f"Expected an env whose task kind is in {sorted(ORACLES)}, found {kind!r}")
     return ORACLES[kind](env)
+
+
+def oracle_policy(env: Any, seed: int) -> _Oracle:
+    """The scripted oracle of the env's task (deterministic; the seed is unused)."""
+    return make_oracle(env)
