@@ -13,8 +13,10 @@ What it does:
     the motion), 8 envs x 128 steps per update; training stops at
     `--timesteps` or after `--budget-min` minutes of wall time, whichever comes first;
   * evaluation on 32 held-out scenes (a different pool seed, never trained on), 32 episodes
-    each for the trained policy (deterministic actions) and a uniform random policy, same
-    reset seeds; success = the task's episode-level success (target centred on >= 70% of
+    each for the trained policy (deterministic actions) and the built-in `random` policy of
+    `morphosim_gym.policies` (uniform actions drawn from each episode's reset seed), same reset
+    seeds; both run as policy factories `factory(env, seed) -> act(obs, info)`, the protocol of
+    `morphosim bench` and `morphosim view`; success = the task's episode-level success (target centred on >= 70% of
     the steps) at the end of the episode;
   * writes examples/results/ppo_track.json (settings, wall times, success rates, returns)
     and examples/results/ppo_track_curve.png (learning curve with the random baseline).
@@ -47,7 +49,12 @@ def make_env(pool_seed: int, pool: int, size: int):
 
 
 def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0: int, stack: int = 1) -> dict:
-    """Run `episodes` episodes; `policy(obs) -> action` (obs: the last `stack` frames along channels)."""
+    """Run `episodes` episodes of a policy factory (a built-in name, "module:callable" or
+    `factory(env, seed) -> act(obs, info)`, see `morphosim_gym.policies`), called once per episode
+    with its reset seed; obs: the last `stack` frames along channels."""
+    from morphosim_gym.policies import resolve_policy
+
+    factory = resolve_policy(policy)
     env = make_env(pool_seed, pool, size)()
     if stack > 1:
         from gymnasium.wrappers import FrameStackObservation, TransformObservation
@@ -61,9 +68,10 @@ def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0:
     succ, frac, ret = [], [], []
     for ep in range(episodes):
         obs, info = env.reset(seed=seed0 + ep)
+        act = factory(env, seed0 + ep)
         total = 0.0
         while True:
-            obs, r, term, trunc, info = env.step(policy(obs))
+            obs, r, term, trunc, info = env.step(act(obs, info))
             total += r
             if term or trunc:
                 break
@@ -150,11 +158,11 @@ def main() -> None:
     print(f"trained {trained_steps} steps in {train_s:.0f}s", flush=True)
 
     t_eval = time.perf_counter()
-    trained = evaluate(lambda o: model.predict(o, deterministic=True)[0], 1, 32, args.size, args.eval_episodes,
-                       10_000, args.frame_stack)
-    rng = np.random.default_rng(12345)
-    random = evaluate(lambda o: rng.uniform(-1, 1, 3).astype(np.float32), 1, 32, args.size, args.eval_episodes,
-                      10_000)
+    def trained_policy(env, seed):
+        return lambda obs, info: model.predict(obs, deterministic=True)[0]
+
+    trained = evaluate(trained_policy, 1, 32, args.size, args.eval_episodes, 10_000, args.frame_stack)
+    random = evaluate("random", 1, 32, args.size, args.eval_episodes, 10_000)
     eval_s = time.perf_counter() - t_eval
     total_s = time.perf_counter() - start
     print(f"trained: {trained}\nrandom:  {random}\ntotal wall {total_s:.0f}s", flush=True)

@@ -103,3 +103,14 @@ def test_zero_policy():
 def test_task_policies_need_a_morphosim_task(factory, who):
     with pytest.raises(ValueError, match=f"MorphoSim env with a task .* for the {who} policy, found SimpleNamespace"):
         factory(box_env(), 0)
+
+
+def test_bench_and_view_document_the_same_policy_specs():
+    import argparse
+
+    from morphosim_gym.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for command in ("bench", "view"):
+        helps = [a.help for a in sub.choices[command]._actions if "--policy" in a.option_strings]
+        assert len(helps) == 1 and POLICY_SPEC_HELP in helps[0], (command, helps)

@@ -200,3 +200,11 @@ def test_track_language_edit_during_an_episode(track_runner):
     assert runner.env.unwrapped.scene.content_hash() != before
     ok, msg = runner.perturb("delete the giraffe")
     assert not ok and "giraffe" in msg
+
+
+def test_cli_checks_the_policy_before_making_the_env(capsys):
+    from morphosim_gym.cli import main
+
+    assert main(["view", "--env", "MorphoSim/Nothing-v0", "--policy", "nope"]) == 2
+    err = capsys.readouterr().err
+    assert "Expected a policy in ['color', 'oracle', 'random', 'zero'] or 'module:callable', found 'nope'" in err
