@@ -52,7 +52,7 @@ def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0:
     """Run `episodes` episodes of a policy factory (a built-in name, "module:callable" or
     `factory(env, seed) -> act(obs, info)`, see `morphosim_gym.policies`), called once per episode
     with its reset seed; obs: the last `stack` frames along channels."""
-    from morphosim_gym.policies import resolve_policy
+    from morphosim_gym.policies import policy_for_episode, resolve_policy
 
     factory = resolve_policy(policy)
     env = make_env(pool_seed, pool, size)()
@@ -68,7 +68,7 @@ def evaluate(policy, pool_seed: int, pool: int, size: int, episodes: int, seed0:
     succ, frac, ret = [], [], []
     for ep in range(episodes):
         obs, info = env.reset(seed=seed0 + ep)
-        act = factory(env, seed0 + ep)
+        act = policy_for_episode(factory, env, seed0 + ep)
         total = 0.0
         while True:
             obs, r, term, trunc, info = env.step(act(obs, info))

@@ -16,7 +16,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..policies import resolve_policy
+from ..policies import policy_for_episode
 from .perturb import camera_option, resolve_edits, sample_episode, template_values
 from .suite import Suite
 
@@ -152,7 +152,7 @@ class EpisodeRunner:
         except ValueError as exc:
             raise _Failure("perturbation" if edits and pert.at == 0 else "env", _text(exc)) from None
         try:
-            act = resolve_policy(key.policy)(env, key.seed)
+            act = policy_for_episode(key.policy, env, key.seed)
         except Exception as exc:
             raise _Failure("policy", f"the policy factory raised {_text(exc)}") from None
         return self._loop(env, act, obs, info, pert.at, edits, frames, record)

@@ -9,9 +9,9 @@ from typing import Any
 from .basic import random_policy, zero_policy
 from .color import color_policy
 from .oracles import oracle_policy
-from .protocol import PolicyFactory
+from .protocol import Act, PolicyFactory
 
-__all__ = ["BUILTIN_POLICIES", "POLICY_SPEC_HELP", "resolve_policy"]
+__all__ = ["BUILTIN_POLICIES", "POLICY_SPEC_HELP", "resolve_policy", "policy_for_episode"]
 
 BUILTIN_POLICIES: dict[str, PolicyFactory] = {
     "random": random_policy,        # uniform actions drawn from the episode seed
@@ -61,3 +61,13 @@ def resolve_policy(spec: str | PolicyFactory) -> PolicyFactory:
         raise ValueError(f"Expected policy {spec!r} to be callable as factory(env, seed), found "
                          f"{type(factory).__name__}")
     return factory
+
+
+def policy_for_episode(spec: str | PolicyFactory, env: Any, seed: int) -> Act:
+    """The `act` of one episode: `resolve_policy(spec)(env, seed)`, checked to be callable (a
+    function written as `fn(obs, ...) -> action` instead of a factory fails here, by name)."""
+    act = resolve_policy(spec)(env, seed)
+    if not callable(act):
+        raise ValueError(f"Expected policy {getattr(spec, '__name__', spec)!r} to be a factory(env, seed) returning "
+                         f"act(obs, info), found it returned {type(act).__name__}")
+    return act

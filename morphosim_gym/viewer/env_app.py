@@ -25,7 +25,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..policies import Act, PolicyFactory, resolve_policy
+from ..policies import Act, PolicyFactory, policy_for_episode, resolve_policy
 from ..scene import Camera, Gaussians
 from .camera import camera_from_viewer, render_size, viewer_pose, viewer_view
 from .session import md_escape
@@ -112,7 +112,7 @@ class EnvRunner:
             self.episode += 1
             seed = self.seed + self.episode - 1
             obs, info = self.env.reset(seed=seed)
-            self.act = self.factory(self.env, seed)
+            self.act = policy_for_episode(self.factory, self.env, seed)
             self.rewards = []
             return self._set(StepRecord(self.episode, 0, obs, 0.0, 0.0, False, False, dict(info), 0))
 

@@ -6,8 +6,18 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
-from morphosim_gym.policies import (BUILTIN_POLICIES, POLICY_SPEC_HELP, Act, PolicyFactory, color_policy,
-                                    oracle_policy, random_policy, resolve_policy, zero_policy)
+from morphosim_gym.policies import (
+    BUILTIN_POLICIES,
+    POLICY_SPEC_HELP,
+    Act,
+    PolicyFactory,
+    color_policy,
+    oracle_policy,
+    policy_for_episode,
+    random_policy,
+    resolve_policy,
+    zero_policy,
+)
 
 BOX = spaces.Box(-1.0, 1.0, (3,), np.float32)
 
@@ -114,3 +124,19 @@ def test_bench_and_view_document_the_same_policy_specs():
     for command in ("bench", "view"):
         helps = [a.help for a in sub.choices[command]._actions if "--policy" in a.option_strings]
         assert len(helps) == 1 and POLICY_SPEC_HELP in helps[0], (command, helps)
+
+
+def old_style(obs, action_space):
+    """A viewer policy of the old protocol: an action, not an act."""
+    return np.zeros(3, np.float32)
+
+
+def test_policy_for_episode_calls_the_factory_and_checks_what_it_gives():
+    act = policy_for_episode("random", box_env(), 3)
+    np.testing.assert_array_equal(act(None, {}), random_policy(box_env(), 3)(None, {}))
+    assert policy_for_episode(forward_factory, box_env(), 0)(None, {}).tolist() == [0.5, 0.5, 0.5]
+    with pytest.raises(ValueError, match=r"Expected policy 'old_style' to be a factory\(env, seed\) returning "
+                                         r"act\(obs, info\), found it returned ndarray"):
+        policy_for_episode(old_style, box_env(), 0)
+    with pytest.raises(ValueError, match="'tests.policies.test_policies:old_style' to be a factory"):
+        policy_for_episode("tests.policies.test_policies:old_style", box_env(), 0)

@@ -110,6 +110,8 @@ def test_policies_by_name():
     for bad in ("", "best", "tests.viewer.test_env_viewer:nothing", "no_such_module:f"):
         with pytest.raises(ValueError, match="policy"):
             EnvRunner(CountingEnv(), policy=bad)
+    with pytest.raises(ValueError, match="to be a factory"):        # the viewer's old fn(obs, action_space)
+        EnvRunner(CountingEnv(), policy=lambda obs, action_space: np.zeros(2, np.float32))
 
 
 def test_task_policies_on_an_env_without_a_task_say_so():
