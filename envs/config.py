@@ -13,7 +13,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any, Mapping, Optional
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
 
 import numpy as np
 
@@ -42,10 +42,67 @@ def check_int(value: Any, name: str, low: int = 0) -> int:
     return int(value)
 
 
-def _check_size(value: Any, name: str) -> int:
+def _size(name: str, value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 8 <= int(value) <= 1024:
         raise ValueError(f"Expected {name} as an integer in [8, 1024], found {value!r}")
     return int(value)
+
+
+def _rate(name: str, value: Any) -> float:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.5 <= value <= 100):
+        raise ValueError(f"Expected {name} in [0.5, 100], found {value!r}")
+    return float(value)
+
+
+def _one_of(choices: tuple, none_ok: bool = False) -> Callable[[str, Any], Any]:
+    def check(name: str, value: Any) -> Any:
+        if value not in choices and not (none_ok and value is None):
+            shown = f"{list(choices)} or None" if none_ok else f"{choices}"
+            raise ValueError(f"Expected {name} in {shown}, found {value!r}")
+        return value
+
+    return check
+
+
+def _prompt(name: str, value: Any) -> Optional[str]:
+    if value is not None and (not isinstance(value, str) or not value.strip()):
+        raise ValueError(f"Expected {name} as a non-empty string, found {value!r}")
+    return value
+
+
+def _int(low: int, none_ok: bool = True) -> Callable[[str, Any], Optional[int]]:
+    def check(name: str, value: Any) -> Optional[int]:
+        return None if value is None and none_ok else check_int(value, name, low)
+
+    return check
+
+
+def _cameras(name: str, value: Any) -> Optional[tuple]:
+    return None if value is None else tuple(value)
+
+
+def _sim(name: str, value: Any) -> Any:
+    if not (value is None or isinstance(value, SimConfig) or hasattr(value, "generate")):
+        raise ValueError(f"Expected {name} as a MorphoSim, a SimConfig or None, found {type(value).__name__}")
+    return value
+
+
+def _flag(name: str, value: Any) -> bool:
+    return bool(value)
+
+
+_CHECKS: dict[str, Callable[[str, Any], Any]] = {     # in the order the errors are reported
+    "width": _size, "height": _size, "render_width": _size, "render_height": _size,
+    "control_hz": _rate,
+    "render_mode": _one_of(RENDER_MODES, none_ok=True),
+    "on_edit_error": _one_of(ON_EDIT_ERROR),
+    "prompt": _prompt,
+    "scene_seed": _int(0), "scene_pool": _int(1), "pool_seed": _int(0, none_ok=False), "render_threads": _int(1),
+    "cameras": _cameras,
+    "sim": _sim,
+    "depth": _flag, "segmentation": _flag, "terminate_on_success": _flag,
+}
+"""Field -> check: the checked, normalised value or an "Expected ..., found ..." `ValueError`."""
 
 
 @dataclass(frozen=True)
@@ -80,30 +137,8 @@ class EnvConfig:
     task_params: dict | None = None
 
     def __post_init__(self) -> None:
-        norm: dict[str, Any] = {}
-        for name in ("width", "height", "render_width", "render_height"):
-            norm[name] = _check_size(getattr(self, name), name)
-        hz = self.control_hz
-        if not (isinstance(hz, (int, float)) and math.isfinite(hz) and 0.5 <= hz <= 100):
-            raise ValueError(f"Expected control_hz in [0.5, 100], found {hz!r}")
-        if self.render_mode is not None and self.render_mode not in RENDER_MODES:
-            raise ValueError(f"Expected render_mode in {list(RENDER_MODES)} or None, found {self.render_mode!r}")
-        if self.on_edit_error not in ON_EDIT_ERROR:
-            raise ValueError(f"Expected on_edit_error in {ON_EDIT_ERROR}, found {self.on_edit_error!r}")
-        if self.prompt is not None and (not isinstance(self.prompt, str) or not self.prompt.strip()):
-            raise ValueError(f"Expected prompt as a non-empty string, found {self.prompt!r}")
-        for name, low in (("scene_seed", 0), ("scene_pool", 1), ("pool_seed", 0), ("render_threads", 1)):
-            value = getattr(self, name)
-            if value is not None or name == "pool_seed":
-                norm[name] = check_int(value, name, low)
-        if self.cameras is not None:
-            norm["cameras"] = tuple(self.cameras)
-        if not (self.sim is None or isinstance(self.sim, SimConfig) or hasattr(self.sim, "generate")):
-            raise ValueError(f"Expected sim as a MorphoSim, a SimConfig or None, found {type(self.sim).__name__}")
-        norm.update(control_hz=float(hz), depth=bool(self.depth), segmentation=bool(self.segmentation),
-                    terminate_on_success=bool(self.terminate_on_success))
-        for name, value in norm.items():
-            object.__setattr__(self, name, value)
+        for name, check in _CHECKS.items():
+            object.__setattr__(self, name, check(name, getattr(self, name)))
 
     @classmethod
     def from_kwargs(cls, kwargs: Mapping[str, Any], defaults: Optional[Mapping[str, Any]] = None) -> "EnvConfig":

@@ -3,7 +3,7 @@
 This module is the lifecycle glue: reset chooses a scene, applies the reset edits and lets the
 task place the rig; step moves the rig, advances scene time, renders and hands the task camera's
 view to the task. The parts live beside it: arguments (`config.EnvConfig`), reset options
-(`options`), scene choice and pools (`scenes`), observations and spaces (`observations`),
+(`options`), scene choice and pools (`scenes`), observations and actions (`spaces`),
 edits (`edits`), numba threads (`threads`). The registered envs (`TrackEnv`, `ReachEnv`,
 `FindEnv`) are subclasses that only fix the task kind and document it.
 """
@@ -14,7 +14,6 @@ from typing import Any, Mapping, Optional
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
 from morphosim_gym.render.api import render as render_scene
 from morphosim_gym.rig import AGENT_OBJECT_ID
@@ -23,9 +22,9 @@ from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
 
 from .config import RENDER_MODES, EnvConfig, env_signature, make_sim
 from .edits import apply_edit
-from .observations import Observations, observed_cameras
 from .options import ResetOptions
 from .scenes import SceneChooser, SceneSource
+from .spaces import Observations, action_space, check_action, observed_cameras
 from .threads import numba_threads
 from .world import SceneWorld
 
@@ -64,7 +63,7 @@ class MorphoSimEnv(gym.Env):
         self.render_mode = cfg.render_mode
         self.metadata = dict(self.metadata, render_fps=cfg.control_hz)
         self.observation_space = self._observe.space
-        self.action_space = spaces.Box(-1.0, 1.0, (self._rig.action_dim,), np.float32)
+        self.action_space = action_space(self._rig)
         self._scenes = SceneChooser(self._task, cfg.prompt, cfg.target, cfg.scene_seed, cfg.scene_pool, cfg.pool_seed)
         self._scenes.prebuild(self._source)                  # resets from the pool do not generate
         self._world: Optional[SceneWorld] = None
@@ -160,7 +159,7 @@ class MorphoSimEnv(gym.Env):
 
     # ================================================================== step
     def step(self, action: Any) -> tuple[dict, float, bool, bool, dict]:
-        a = self._check_action(action)
+        a = check_action(action, self.action_space.shape)
         with numba_threads(self.config.render_threads):
             return self._step(a)
 
@@ -175,19 +174,6 @@ class MorphoSimEnv(gym.Env):
         truncated = bool(world.t >= world.duration - 1e-9)
         info = self._info(views, ev.success, ev.terms, ev.metrics)
         return self._observe(views, self._rig.proprio()), float(ev.reward), terminated, truncated, info
-
-    def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"Expected an action of shape {self.action_space.shape}, found {action!r}") from exc
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"Expected an action of shape {self.action_space.shape}, found shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            bad = np.flatnonzero(~np.isfinite(a)).tolist()
-            raise ValueError(f"Expected finite action values, found NaN or inf at indices {bad}; the step was "
-                             "not taken")
-        return np.clip(a, -1.0, 1.0)          # out-of-range values are clipped to the Box
 
     # ================================================================== render
     def _sources(self, t: float) -> list:

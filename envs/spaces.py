@@ -1,6 +1,6 @@
-"""The observation dict of an env and its space: `rgb` (and `depth`, `segmentation`) per observed
-camera, `proprio` from the rig. The first camera's keys have no suffix, each other camera `name`
-adds `_name`."""
+"""The env's spaces: the observation dict built from rendered views (`rgb`, and `depth`,
+`segmentation`, per observed camera; `proprio` from the rig; the first camera's keys have no
+suffix, each other camera `name` adds `_name`), and the action `Box` with its check."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from morphosim_gym.rig import AGENT_OBJECT_ID
 
-__all__ = ["Observations", "observed_cameras"]
+__all__ = ["Observations", "observed_cameras", "action_space", "check_action"]
 
 
 def observed_cameras(cameras: Optional[Sequence[str]], default: Sequence[str], rig_cameras: Sequence[str]) -> tuple:
@@ -67,3 +67,24 @@ class Observations:
                 obs[seg_key] = np.array(inst, dtype=np.int32)
         obs["proprio"] = proprio
         return obs
+
+
+def action_space(rig: Any) -> spaces.Box:
+    """`Box(-1, 1, (rig.action_dim,), float32)`."""
+    return spaces.Box(-1.0, 1.0, (rig.action_dim,), np.float32)
+
+
+def check_action(action: Any, shape: tuple) -> np.ndarray:
+    """The action as float64 clipped to [-1, 1]; `ValueError` for a wrong shape or a NaN / inf (the
+    step is then not taken)."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"Expected an action of shape {shape}, found {action!r}") from exc
+    if a.shape != shape:
+        raise ValueError(f"Expected an action of shape {shape}, found shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        bad = np.flatnonzero(~np.isfinite(a)).tolist()
+        raise ValueError(f"Expected finite action values, found NaN or inf at indices {bad}; the step was "
+                         "not taken")
+    return np.clip(a, -1.0, 1.0)          # out-of-range values are clipped to the Box
