@@ -10,9 +10,11 @@
     env = gym.make("MorphoSim/Track-v0", render_mode="rgb_array")
     obs, info = env.reset(seed=0, options={"edits": ["make the ball blue"]})
 
-Registration uses string entry points, so importing this package compiles no MuJoCo model
-and generates no scene. The env classes, wrappers and the vector helper are imported
-lazily on first attribute access.
+`ENTRY_POINTS` (task kind -> env class) is the one table behind the ids, `register_task` and
+the benchmark's suites. Every env takes the keyword arguments of `EnvConfig`. Registration
+uses string entry points, so importing this package compiles no MuJoCo model and generates
+no scene. The env classes, wrappers and the vector helper are imported lazily on first
+attribute access.
 """
 
 from __future__ import annotations
