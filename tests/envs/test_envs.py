@@ -542,7 +542,8 @@ def test_config_is_frozen_and_keyword_calls_work():
     assert ReachEnv(sim=FAST_SIM, terminate_on_success=False).config.terminate_on_success is False
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.width = 32
-    assert EnvConfig(scene_seed=np.int64(3)).scene_seed == 3 and type(EnvConfig(scene_seed=np.int64(3)).scene_seed) is int
+    seed = EnvConfig(scene_seed=np.int64(3)).scene_seed
+    assert seed == 3 and type(seed) is int
     for bad, text in ((dict(render_mode="human"), "render_mode"), (dict(scene_pool=0), "scene_pool as an integer >= 1"),
                       (dict(pool_seed=-1), "pool_seed"), (dict(render_threads=True), "render_threads"),
                       (dict(prompt=" "), "prompt"), (dict(scene_seed=1.5), "scene_seed")):
