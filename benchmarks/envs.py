@@ -118,7 +118,7 @@ def breakdown(repeats: int = 300) -> dict:
     cam = u.rig.camera("eye", 84, 84)
     g = scene._at_shared(1.0)
     out["render 84x84 (ms.render)"] = timed(lambda i: ms.render(g, cam, background=scene.background))
-    view = u._last_view
+    _, view = u._render(u.world.t)                     # the task camera's view, as a step hands it to the task
     out["task evaluate (reward)"] = timed(lambda i: u.task.measure(u.world, u.rig, view))
     out["env.step total"] = timed(lambda i: env.step(a) if u.world.t < u.world.duration - 0.2 else env.reset())
     env.close()

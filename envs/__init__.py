@@ -10,9 +10,11 @@
     env = gym.make("MorphoSim/Track-v0", render_mode="rgb_array")
     obs, info = env.reset(seed=0, options={"edits": ["make the ball blue"]})
 
-Registration uses string entry points, so importing this package compiles no MuJoCo model
-and generates no scene. The env classes, wrappers and the vector helper are imported
-lazily on first attribute access.
+`ENTRY_POINTS` (task kind -> env class) is the one table behind the ids, `register_task` and
+the benchmark's suites. Every env takes the keyword arguments of `EnvConfig`. Registration
+uses string entry points, so importing this package compiles no MuJoCo model and generates
+no scene. The env classes, wrappers and the vector helper are imported lazily on first
+attribute access.
 """
 
 from __future__ import annotations
@@ -21,28 +23,36 @@ from typing import Any
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv", "LanguagePerturbation", "RGBObservation",
-           "make_vec", "register_task"]
+__all__ = ["ENV_IDS", "ENTRY_POINTS", "env_id_of", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv", "EnvConfig",
+           "LanguagePerturbation", "RGBObservation", "make_vec", "register_task"]
 
-ENV_IDS = ("MorphoSim/Track-v0", "MorphoSim/Reach-v0", "MorphoSim/Find-v0")
-
-_ENTRY = {
-    "MorphoSim/Track-v0": "morphosim_gym.envs.track:TrackEnv",
-    "MorphoSim/Reach-v0": "morphosim_gym.envs.reach:ReachEnv",
-    "MorphoSim/Find-v0": "morphosim_gym.envs.find:FindEnv",
+ENTRY_POINTS = {
+    "track": "morphosim_gym.envs.track:TrackEnv",
+    "reach": "morphosim_gym.envs.reach:ReachEnv",
+    "find": "morphosim_gym.envs.find:FindEnv",
 }
+"""Task kind -> the env class that runs it (string entry points: nothing is imported here)."""
 
-for _id, _entry in _ENTRY.items():
-    if _id not in registry:
+
+def env_id_of(kind: str) -> str:
+    """The registered id of a task kind's env ("track" -> "MorphoSim/Track-v0")."""
+    return f"MorphoSim/{kind.capitalize()}-v0"
+
+
+ENV_IDS = tuple(env_id_of(kind) for kind in ENTRY_POINTS)
+
+for _kind, _entry in ENTRY_POINTS.items():
+    if env_id_of(_kind) not in registry:
         # No max_episode_steps: the clip ends the episode (truncation at its last frame), so a
         # changed control_hz or clip length never disagrees with a fixed step limit.
-        register(id=_id, entry_point=_entry, disable_env_checker=False)
+        register(id=env_id_of(_kind), entry_point=_entry, disable_env_checker=False)
 
 _LAZY = {
     "TrackEnv": "morphosim_gym.envs.track",
     "ReachEnv": "morphosim_gym.envs.reach",
     "FindEnv": "morphosim_gym.envs.find",
     "MorphoSimEnv": "morphosim_gym.envs.core",
+    "EnvConfig": "morphosim_gym.envs.config",
     "LanguagePerturbation": "morphosim_gym.envs.wrappers",
     "RGBObservation": "morphosim_gym.envs.wrappers",
     "make_vec": "morphosim_gym.envs.vector",

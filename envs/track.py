@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
-
 from .core import MorphoSimEnv
 
 __all__ = ["TrackEnv"]
@@ -89,15 +87,14 @@ class TrackEnv(MorphoSimEnv):
     | `segmentation` | `bool` | `False` | add `segmentation` (instance id) observations |
     | `cameras` | `tuple[str, ...] \\| None` | `None` | rig cameras to observe; None = `("eye",)` |
     | `control_hz` | `float` | `10.0` | control rate; scene time advances 1 / control_hz per step |
-    | `detail` | `float` | `0.35` | Gaussian budget multiplier of generated scenes (0.35: as sharp as 0.5 at 84 px, ~25% faster) |
-    | `reconstruction` | `str` | `"oracle"` | how a clip becomes a scene: `"oracle"` (the generator's ground truth, fast) or `"fit"` (real reconstruction, minutes per scene, cached on disk) |
     | `render_agent` | `bool \\| None` | `None` | draw the rig's own geoms; None = task default (False) |
+    | `terminate_on_success` | `bool` | `False` | no effect: Track never terminates, the clip's end truncates |
     | `on_edit_error` | `str` | `"raise"` | failed edits: `"raise"`, or `"skip"` and go on with the unedited scene |
     | `render_mode` | `str \\| None` | `None` | `"rgb_array"` for `render()` |
     | `render_width` | `int` | `256` | `render()` frame width |
     | `render_height` | `int` | `256` | `render()` frame height |
     | `render_threads` | `int \\| None` | `1` | numba threads for this env's skinning and rendering (set per call, then restored); None = numba's default |
-    | `sim` | `MorphoSim \\| None` | `None` | a configured `MorphoSim` (overrides `detail`, `reconstruction`) |
+    | `sim` | `MorphoSim \\| SimConfig \\| None` | `None` | the world: a `MorphoSim` or a `SimConfig`; None = `envs.config.DEFAULT_SIM_CONFIG` (oracle, detail 0.35) |
     | `task_params` | `dict \\| None` | `None` | overrides of `TrackTask.PARAMS` |
 
     Reset options: `prompt`, `scene_seed`, `target`, `edits` (language edits applied
@@ -110,35 +107,3 @@ class TrackEnv(MorphoSimEnv):
     """
 
     task_kind = "track"
-
-    def __init__(
-        self,
-        task: Any = None,
-        prompt: Optional[str] = None,
-        target: Optional[str] = None,
-        scene_seed: Optional[int] = None,
-        scene_pool: Optional[int] = None,
-        pool_seed: int = 0,
-        width: int = 84,
-        height: int = 84,
-        depth: bool = False,
-        segmentation: bool = False,
-        cameras: Optional[tuple[str, ...]] = None,
-        control_hz: float = 10.0,
-        detail: float = 0.35,
-        reconstruction: str = "oracle",
-        render_agent: Optional[bool] = None,
-        on_edit_error: str = "raise",
-        render_mode: Optional[str] = None,
-        render_width: int = 256,
-        render_height: int = 256,
-        render_threads: Optional[int] = 1,
-        sim: Any = None,
-        task_params: Optional[dict] = None,
-    ) -> None:
-        super().__init__(task=task, prompt=prompt, target=target, scene_seed=scene_seed, scene_pool=scene_pool,
-                         pool_seed=pool_seed, width=width, height=height, depth=depth, segmentation=segmentation,
-                         cameras=cameras, control_hz=control_hz, detail=detail, reconstruction=reconstruction,
-                         render_agent=render_agent, terminate_on_success=False, on_edit_error=on_edit_error,
-                         render_mode=render_mode, render_width=render_width, render_height=render_height,
-                         render_threads=render_threads, sim=sim, task_params=task_params)

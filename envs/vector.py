@@ -1,4 +1,5 @@
-"""Vector envs on a few CPU cores, and registering YAML tasks as env ids."""
+"""Vector envs on a few CPU cores (a thin layer over `gym.make_vec`), and registering YAML tasks
+as env ids."""
 
 from __future__ import annotations
 
@@ -7,31 +8,15 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 
 import gymnasium as gym
 
+from . import ENTRY_POINTS
+
 __all__ = ["make_vec", "register_task"]
-
-_KIND_ENTRY = {
-    "track": "morphosim_gym.envs.track:TrackEnv",
-    "reach": "morphosim_gym.envs.reach:ReachEnv",
-    "find": "morphosim_gym.envs.find:FindEnv",
-}
-
-
-def _make_one(env_id: str, kwargs: dict, wrappers: Sequence[Callable[[gym.Env], gym.Env]]) -> Callable[[], gym.Env]:
-    def thunk() -> gym.Env:
-        import morphosim_gym  # noqa: F401  (registers the ids in a spawned worker)
-
-        env = gym.make(env_id, **kwargs)
-        for w in wrappers:
-            env = w(env)
-        return env
-
-    return thunk
 
 
 def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", render_threads: Optional[int] = None,
              wrappers: Sequence[Callable[[gym.Env], gym.Env]] = (), context: Optional[str] = None,
              **kwargs: Any) -> gym.vector.VectorEnv:
-    """A vector env of `num_envs` copies of `env_id`.
+    """A vector env of `num_envs` copies of `env_id` (`gym.make_vec` with these defaults).
 
     Args:
         env_id: a registered id (e.g. "MorphoSim/Track-v0").
@@ -53,10 +38,9 @@ def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", rend
         raise ValueError(f"Expected vectorization_mode 'async' or 'sync', found {vectorization_mode!r}")
     if render_threads is not None:
         kwargs = dict(kwargs, render_threads=render_threads)
-    fns = [_make_one(env_id, dict(kwargs), tuple(wrappers)) for _ in range(num_envs)]
-    if vectorization_mode == "sync":
-        return gym.vector.SyncVectorEnv(fns)
-    return gym.vector.AsyncVectorEnv(fns, context=context or "spawn")
+    vector_kwargs = {"context": context or "spawn"} if vectorization_mode == "async" else {}
+    return gym.make_vec(env_id, num_envs, vectorization_mode=vectorization_mode, vector_kwargs=vector_kwargs,
+                        wrappers=list(wrappers), **kwargs)
 
 
 def register_task(source: str | Path | Mapping[str, Any], env_id: Optional[str] = None, **kwargs: Any) -> str:
@@ -73,5 +57,5 @@ def register_task(source: str | Path | Mapping[str, Any], env_id: Optional[str] 
         name = "".join(part.capitalize() for part in spec.name.replace("_", "-").split("-") if part)
         env_id = f"MorphoSim/{name}-v0"
     task_arg = str(source) if isinstance(source, (str, Path)) else spec
-    gym.register(id=env_id, entry_point=_KIND_ENTRY[spec.kind], kwargs=dict(kwargs, task=task_arg))
+    gym.register(id=env_id, entry_point=ENTRY_POINTS[spec.kind], kwargs=dict(kwargs, task=task_arg))
     return env_id

@@ -96,8 +96,19 @@ class Evaluation:
 
 
 class Task:
-    """Base of the task kinds. Subclasses set `kind`, `rig_class`, `task_camera`, `default_cameras`,
-    `render_agent`, `PARAMS` (defaults of every tunable number, overridable from YAML `params`)."""
+    """Base of the task kinds: everything the env calls on a task is declared here.
+
+    Subclasses set the class attributes and implement `make_rig`, `initialize_episode`,
+    `measure` and `evaluate`; the env hands `measure` and `evaluate` the task camera's view of
+    the step it rendered (`TaskView`), so a task never renders and never reads the env.
+
+    Attributes:
+        kind: the task kind ("track", "reach", "find"), matched against the env's.
+        task_camera: the rig camera whose view (`TaskView`) the task measures.
+        default_cameras: the observed cameras when the env's `cameras` is None.
+        render_agent: whether the rig's own geoms are drawn when the env's `render_agent` is None.
+        PARAMS: defaults of every tunable number, overridable from YAML `params` or keywords.
+    """
 
     kind = ""
     task_camera = ""
@@ -166,12 +177,19 @@ class Task:
         raise NotImplementedError
 
     def measure(self, world: Any, rig: Any, view: TaskView) -> dict[str, Any]:
-        """Task measurements of the current state (no reward, no bookkeeping)."""
+        """Task measurements of the current state, from the world, the rig and the view the env
+        just rendered (no reward, no bookkeeping)."""
         raise NotImplementedError
 
     def evaluate(self, world: Any, rig: Any, view: TaskView, action: np.ndarray) -> Evaluation:
-        """Reward terms, success and termination after a step (updates episode statistics)."""
+        """Reward terms, success and termination after a step, from the view the env rendered after
+        applying `action` (updates episode statistics)."""
         raise NotImplementedError
+
+    def reset_metrics(self) -> dict[str, Any]:
+        """Episode statistics as they stand at reset (merged into the reset info after `measure`);
+        none by default."""
+        return {}
 
     def reward_range(self) -> tuple[float, float]:
         """(min, max) of the reward."""

@@ -16,6 +16,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from morphosim_gym.envs.wrappers import LanguagePerturbation
+
 from ..policies import policy_for_episode
 from .perturb import camera_option, resolve_edits, sample_episode, template_values
 from .suite import Suite
@@ -23,7 +25,7 @@ from .suite import Suite
 __all__ = ["EpisodeKey", "EpisodeResult", "EpisodeRunner", "STAGES", "make_sim"]
 
 STAGES = ("suite", "scene", "perturbation", "policy", "env")
-_SKIP_INFO = {"success", "step", "t", "scene_seed", "target_id", "edits", "edit_errors"}
+_SKIP_INFO = {"success", "step", "t", "scene_seed", "target_id", "edits", "edit_errors", "perturbations"}
 
 
 @dataclass(frozen=True, order=True)
@@ -61,13 +63,14 @@ def _text(exc: BaseException) -> str:
 
 
 def make_sim(suite: Suite, cache_dir: Optional[str]) -> Any:
-    """The suite's `MorphoSim`, caching generated scenes on disk under `cache_dir` (None = default)."""
-    import morphosim_gym as ms
+    """The envs' default `MorphoSim` (`envs.config.DEFAULT_SIM_CONFIG`), caching generated scenes on
+    disk under `cache_dir` (None = default)."""
+    from dataclasses import replace
 
-    kw = suite.env_kwargs
-    return ms.MorphoSim(reconstruction=kw.get("reconstruction", "oracle"),
-                        generation=ms.GenerationConfig(detail=float(kw.get("detail", 0.35))),
-                        cache=True, cache_dir=cache_dir)
+    import morphosim_gym as ms
+    from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
+
+    return ms.MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir))
 
 
 class EpisodeRunner:
@@ -91,9 +94,8 @@ class EpisodeRunner:
 
             import morphosim_gym  # noqa: F401  (registers the ids)
 
-            kw = {k: v for k, v in self.suite.env_kwargs.items() if k not in ("detail", "reconstruction")}
             self._env = gym.make(self.suite.env_id, task=self.suite.task, sim=self.sim, on_edit_error="raise",
-                                 disable_env_checker=True, **kw)
+                                 disable_env_checker=True, **self.suite.env_kwargs)
         return self._env
 
     def prepare(self, seed: int) -> str:
@@ -145,8 +147,10 @@ class EpisodeRunner:
         record.update(edits=list(edits), camera=camera or None)
         options: dict[str, Any] = {"prompt": ep.request.prompt, "scene_seed": ep.scene_seed,
                                    "target": ep.request.target or None, "camera": camera}
-        if pert.at == 0:
-            options["edits"] = list(edits)
+        try:
+            env = LanguagePerturbation(env, schedule={pert.at: edits} if edits else {})   # the one edit scheduler
+        except ValueError as exc:
+            raise _Failure("perturbation", _text(exc)) from None
         try:
             obs, info = env.reset(seed=key.seed, options=options)
         except ValueError as exc:
@@ -157,8 +161,8 @@ class EpisodeRunner:
             raise _Failure("policy", f"the policy factory raised {_text(exc)}") from None
         return self._loop(env, act, obs, info, pert.at, edits, frames, record)
 
-    def _loop(self, env: Any, act: Any, obs: Any, info: dict, at: int, edits: tuple[str, ...], frames: int,
-              record: dict) -> Optional[np.ndarray]:
+    def _loop(self, env: LanguagePerturbation, act: Any, obs: Any, info: dict, at: int, edits: tuple[str, ...],
+              frames: int, record: dict) -> Optional[np.ndarray]:
         u = env.unwrapped
         horizon = max(int(round(u.world.duration / u.dt)), 1)
         keep = sorted(set(np.round(np.linspace(0, horizon, frames)).astype(int).tolist())) if frames else []
@@ -172,13 +176,12 @@ class EpisodeRunner:
                 raise _Failure("policy", f"the policy raised {_text(exc)} at step {step}") from None
             a = _check_action(action, space.shape, step)
             step += 1
-            if step == at:
-                for text in edits:
-                    try:
-                        u.perturb(text)
-                    except ValueError as exc:
-                        raise _Failure("perturbation", f"{_text(exc)} (before step {step})") from None
-            obs, reward, terminated, truncated, info = env.step(a)
+            try:
+                obs, reward, terminated, truncated, info = env.step(a)      # the wrapper applies the edits due
+            except ValueError as exc:
+                if env.failed is None:
+                    raise
+                raise _Failure("perturbation", f"{_text(exc)} (before step {step})") from None
             total += float(reward)
             if step in keep:
                 shots[step] = obs["rgb"].copy()

@@ -42,6 +42,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
+from morphosim_gym.envs import ENTRY_POINTS, env_id_of
 from morphosim_gym.tasks import TASK_DIR, TaskSpec, load_task_spec
 
 __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "builtin_suite_names", "SUITE_DIR",
@@ -49,7 +50,7 @@ __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "
 
 SUITE_DIR = TASK_DIR / "suites"
 BASE = "base"
-ENV_TASKS = {"MorphoSim/Track-v0": "track", "MorphoSim/Reach-v0": "reach", "MorphoSim/Find-v0": "find"}
+ENV_TASKS = {env_id_of(kind): kind for kind in ENTRY_POINTS}      # env id -> the task kind it runs
 TEMPLATE_FIELDS = ("target", "target_noun", "target_color", "distractor", "distractor_noun", "new_color")
 SUITE_KEYS = ("name", "env", "description", "task", "scenes", "env_kwargs", "seed", "episodes", "frames",
               "perturbations")

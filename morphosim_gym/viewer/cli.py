@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from ..policies import POLICY_SPEC_HELP, resolve_policy
 
@@ -22,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--env", default=None, help="watch an env instead, e.g. MorphoSim/Track-v0")
     p.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                    help="with --env: a keyword argument of gym.make, value read as YAML (repeatable), "
-                        "e.g. --env-option detail=1.0")
+                        "e.g. --env-option width=128")
     p.add_argument("--policy", default="random", metavar="SPEC",
                    help=f"with --env: {POLICY_SPEC_HELP} (default: random)")
     p.add_argument("--episodes", type=int, default=0, help="with --env: stop after this many episodes (0: never)")
@@ -54,10 +55,8 @@ def _view(args: argparse.Namespace) -> int:
         kwargs = _env_options(args.env_option)
         if args.source is not None:
             kwargs["prompt"] = args.source
-        if args.detail is not None:
-            kwargs.setdefault("detail", args.detail)
-        if args.reconstruction != "oracle":
-            kwargs.setdefault("reconstruction", args.reconstruction)
+        if args.detail is not None or args.reconstruction != "oracle":
+            kwargs.setdefault("sim", _env_sim(args.detail, args.reconstruction))
         print(f"morphosim view: making {args.env} ...", flush=True)
         viewer = EnvViewer(args.env, policy=policy, seed=args.seed,
                            episodes=args.episodes, env_kwargs=kwargs, host=args.host, port=args.port,
@@ -85,6 +84,17 @@ def _view(args: argparse.Namespace) -> int:
           f"{scene.duration:g} s) at {viewer.url} (Ctrl-C to stop)", flush=True)
     viewer.serve_forever()
     return 0
+
+
+def _env_sim(detail: float | None, reconstruction: str) -> Any:
+    """The env's world for --detail / --reconstruction: the envs' default with those changed."""
+    from dataclasses import replace
+
+    from ..envs.config import DEFAULT_SIM_CONFIG
+
+    generation = DEFAULT_SIM_CONFIG.generation if detail is None else replace(DEFAULT_SIM_CONFIG.generation,
+                                                                              detail=detail)
+    return replace(DEFAULT_SIM_CONFIG, reconstruction=reconstruction, generation=generation)
 
 
 def _env_options(items: list[str]) -> dict:

@@ -3,10 +3,11 @@
 import gymnasium as gym
 import pytest
 
-import morphosim_gym  # noqa: F401  (registers the ids)
+import morphosim_gym as ms  # (importing registers the ids)
 from morphosim_gym.envs import ENV_IDS
 
-FAST = dict(width=32, height=32, detail=0.25)
+FAST_SIM = ms.SimConfig(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.25))
+FAST = dict(width=32, height=32, sim=FAST_SIM)
 PROMPT = "a red ball moves from left to right"
 
 

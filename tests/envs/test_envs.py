@@ -1,6 +1,7 @@
 """The Gymnasium envs: API conformance, determinism, rewards, options, actions, edits, ecosystem."""
 
 import ast
+import dataclasses
 import inspect
 import re
 import subprocess
@@ -14,12 +15,14 @@ from gymnasium.utils.env_checker import check_env
 
 import morphosim_gym as ms
 from morphosim_gym.envs import ENV_IDS, LanguagePerturbation, RGBObservation
-from morphosim_gym.envs.core import SceneSource
+from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG, EnvConfig
 from morphosim_gym.envs.find import FindEnv
+from morphosim_gym.envs.scenes import SceneSource
+from morphosim_gym.tasks import Task
 from morphosim_gym.envs.reach import ReachEnv
 from morphosim_gym.envs.track import TrackEnv
 
-from .conftest import FAST, PROMPT, make
+from .conftest import FAST, FAST_SIM, PROMPT, make
 
 ENV_CLASSES = (TrackEnv, ReachEnv, FindEnv)
 
@@ -58,7 +61,7 @@ def test_spaces(env_id):
 
 
 def test_default_observation_is_84px_rgb_and_proprio():
-    env = gym.make("MorphoSim/Track-v0", detail=0.25)
+    env = gym.make("MorphoSim/Track-v0", sim=FAST_SIM)
     obs, _ = env.reset(seed=0)
     assert set(obs) == {"rgb", "proprio"} and obs["rgb"].shape == (84, 84, 3)
 
@@ -97,17 +100,32 @@ def _arguments_table(cls):
         if not line.startswith("| `"):
             continue
         cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
-        rows[cells[0].strip("`")] = cells[2].strip("`")
+        rows[cells[0].strip("`")] = (cells[1].strip("`").replace("\\|", "|"), cells[2].strip("`"))
     return rows
 
 
 @pytest.mark.parametrize("cls", ENV_CLASSES)
-def test_docstring_arguments_table_matches_the_signature(cls):
+def test_docstring_arguments_table_matches_the_config(cls):
+    """Each env's Arguments table has one row per `EnvConfig` field, in field order, with the
+    field's type and the env's default (`EnvConfig`'s, or the env's `config_defaults`)."""
     table = _arguments_table(cls)
-    params = {k: p for k, p in inspect.signature(cls.__init__).parameters.items() if k != "self"}
-    assert set(table) == set(params)
-    for name, text in table.items():
-        assert ast.literal_eval(text) == params[name].default, name
+    fields = {f.name: f for f in dataclasses.fields(EnvConfig)}
+    assert list(table) == list(fields)
+    assert set(cls.config_defaults) <= set(fields)
+    for name, (type_text, default_text) in table.items():
+        assert type_text == fields[name].type, name
+        assert ast.literal_eval(default_text) == cls.config_defaults.get(name, fields[name].default), name
+    assert ast.literal_eval(table["terminate_on_success"][1]) is (cls is not TrackEnv)
+
+
+@pytest.mark.parametrize("cls", ENV_CLASSES)
+def test_signature_shows_the_config_with_the_env_defaults(cls):
+    table = _arguments_table(cls)
+    params = inspect.signature(cls).parameters
+    assert list(params) == list(table)
+    for name, p in params.items():
+        assert p.kind is inspect.Parameter.KEYWORD_ONLY
+        assert p.default == ast.literal_eval(table[name][1]), name
 
 
 @pytest.mark.parametrize("cls", ENV_CLASSES)
@@ -398,7 +416,7 @@ def test_track_camera_override_and_centring_success():
     env.reset(seed=0)
     u = env.unwrapped
     for _ in range(60):
-        cam = u._last_view.camera
+        cam = u.rig.camera(u.task.task_camera, 48, 48)     # the task camera as the last step rendered it
         uv, _ = cam.project(u.world.target_position())
         d = (uv - [cam.cx, cam.cy]) / [cam.cx, cam.cy]
         *_, trunc, info = env.step(np.array([-2 * d[0], -2 * d[1], 0.0], np.float32).clip(-1, 1))
@@ -491,6 +509,103 @@ def test_rgb_observation_wrapper():
     env = RGBObservation(make("MorphoSim/Track-v0"))
     obs, _ = env.reset(seed=0)
     assert obs.shape == (32, 32, 3) and env.observation_space.contains(obs)
+
+
+def test_sim_is_a_morphosim_a_simconfig_or_the_default():
+    sim = ms.MorphoSim(FAST_SIM)
+    shared = make("MorphoSim/Track-v0", sim=sim)
+    assert shared.unwrapped._sim is sim
+    built = make("MorphoSim/Track-v0").unwrapped._sim
+    assert isinstance(built, ms.MorphoSim) and built.config == FAST_SIM
+    default = gym.make("MorphoSim/Track-v0").unwrapped._sim.config
+    assert default == DEFAULT_SIM_CONFIG
+    assert default == ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.35)).config
+    _, a = shared.reset(seed=0, options={"prompt": PROMPT, "scene_seed": 1})
+    assert a["scene_id"] == sim.generate(PROMPT, seed=1).content_hash()
+    with pytest.raises(ValueError, match="Expected sim as a MorphoSim, a SimConfig or None, found int"):
+        make("MorphoSim/Track-v0", sim=3)
+
+
+@pytest.mark.parametrize("name", ["detail", "reconstruction"])
+def test_world_settings_are_no_env_arguments(name):
+    with pytest.raises(TypeError, match=rf"found {name}=.*sim=SimConfig\("):
+        gym.make("MorphoSim/Track-v0", **{name: 0.25 if name == "detail" else "oracle"})
+    with pytest.raises(TypeError, match=r"found unknown \['colour'\]"):
+        TrackEnv(colour="red")
+
+
+def test_config_is_frozen_and_keyword_calls_work():
+    env = TrackEnv(prompt=PROMPT, width=16, height=24, cameras=["eye"], sim=FAST_SIM)
+    cfg = env.config
+    assert (cfg.width, cfg.height, cfg.cameras, cfg.terminate_on_success) == (16, 24, ("eye",), False)
+    assert ReachEnv(sim=FAST_SIM).config.terminate_on_success is True
+    assert ReachEnv(sim=FAST_SIM, terminate_on_success=False).config.terminate_on_success is False
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.width = 32
+    seed = EnvConfig(scene_seed=np.int64(3)).scene_seed
+    assert seed == 3 and type(seed) is int
+    for bad, text in ((dict(render_mode="human"), "render_mode"), (dict(scene_pool=0), "scene_pool as an integer >= 1"),
+                      (dict(pool_seed=-1), "pool_seed"), (dict(render_threads=True), "render_threads"),
+                      (dict(prompt=" "), "prompt"), (dict(scene_seed=1.5), "scene_seed")):
+        with pytest.raises(ValueError, match=text):
+            EnvConfig(**bad)
+
+
+def test_one_entry_point_table_for_ids_and_registered_tasks():
+    from morphosim_gym.envs import ENTRY_POINTS, register_task
+
+    assert ENV_IDS == tuple(f"MorphoSim/{k.capitalize()}-v0" for k in ENTRY_POINTS)
+    for kind, entry in ENTRY_POINTS.items():
+        assert gym.spec(f"MorphoSim/{kind.capitalize()}-v0").entry_point == entry
+        env_id = register_task(kind, env_id=f"MorphoSim/TestTable{kind}-v0")
+        assert gym.spec(env_id).entry_point == entry
+
+
+def test_make_vec_is_gym_make_vec_with_our_defaults(monkeypatch):
+    calls = []
+    monkeypatch.setattr(gym, "make_vec", lambda *a, **k: calls.append((a, k)) or "venv")
+    assert ms.envs.make_vec("MorphoSim/Track-v0", 3, render_threads=2, width=32) == "venv"
+    assert ms.envs.make_vec("MorphoSim/Track-v0", 2, "sync", context="fork") == "venv"
+    (a1, k1), (a2, k2) = calls
+    assert a1 == ("MorphoSim/Track-v0", 3) and k1["vectorization_mode"] == "async"
+    assert k1["vector_kwargs"] == {"context": "spawn"} and k1["render_threads"] == 2 and k1["width"] == 32
+    assert k2["vectorization_mode"] == "sync" and k2["vector_kwargs"] == {}
+    with pytest.raises(ValueError, match="num_envs"):
+        ms.envs.make_vec("MorphoSim/Track-v0", 0)
+    with pytest.raises(ValueError, match="vectorization_mode"):
+        ms.envs.make_vec("MorphoSim/Track-v0", 2, "threads")
+
+
+def test_sync_make_vec_with_wrappers():
+    venv = ms.envs.make_vec("MorphoSim/Track-v0", 2, "sync", wrappers=[RGBObservation], **FAST, scene_pool=1)
+    obs, _ = venv.reset(seed=0)
+    assert obs.shape == (2, 32, 32, 3)
+    venv.close()
+
+
+def test_the_task_gets_the_rendered_view_as_an_argument():
+    env = make("MorphoSim/Track-v0", prompt=PROMPT)
+    u = env.unwrapped
+    seen = []
+    measure, evaluate = u.task.measure, u.task.evaluate
+    u.task.measure = lambda world, rig, view: seen.append(view) or measure(world, rig, view)
+    u.task.evaluate = lambda world, rig, view, a: seen.append(view) or evaluate(world, rig, view, a)
+    env.reset(seed=0)
+    env.step(np.zeros(3, np.float32))
+    assert seen[0].t == 0.0 and seen[1].t == pytest.approx(0.1) and not hasattr(u, "_last_view")
+    assert all(v is seen[1] for v in seen[1:])             # evaluate measures the same view
+    assert seen[1].instance.shape == (32, 32) and seen[1].camera.width == 32
+    assert Task.reset_metrics(u.task) == {}
+
+
+def test_wrapper_failed_names_the_edit_that_raised():
+    env = LanguagePerturbation(make("MorphoSim/Track-v0", prompt=PROMPT), schedule={2: "reverse the ground"})
+    env.reset(seed=0)
+    env.step(np.zeros(3, np.float32))
+    assert env.failed is None
+    with pytest.raises(ms.EditError, match="ground"):
+        env.step(np.zeros(3, np.float32))
+    assert env.failed == (2, "reverse the ground") and env.unwrapped._step_count == 1
 
 
 def test_constructor_errors():

@@ -96,7 +96,7 @@ def test_scene_distribution_prompts_generate_with_their_target(name):
     """Every sampled prompt parses and generates, and the target is the named object (with its colour)."""
     spec = load_task_spec(name)
     sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.2))
-    from morphosim_gym.envs.core import SceneSource
+    from morphosim_gym.envs.scenes import SceneSource
 
     src = SceneSource(sim)
     task = make_task(name)
@@ -117,7 +117,7 @@ def test_scene_distribution_prompts_generate_with_their_target(name):
 def test_scene_distribution_many_prompts(name):
     spec = load_task_spec(name)
     sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.2))
-    from morphosim_gym.envs.core import SceneSource
+    from morphosim_gym.envs.scenes import SceneSource
 
     src = SceneSource(sim)
     task = make_task(name)

@@ -111,6 +111,14 @@ def test_cli_arguments_are_checked(capsys):
     assert "no file" in capsys.readouterr().err
 
 
+def test_cli_env_world_options_become_the_env_sim():
+    from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
+    from morphosim_gym.viewer.cli import _env_sim
+
+    assert _env_sim(None, "oracle") == DEFAULT_SIM_CONFIG
+    assert _env_sim(1.0, "fit") == ms.SimConfig(reconstruction="fit", generation=ms.GenerationConfig(detail=1.0))
+
+
 def test_cli_serves_a_scene_file(tmp_path, ball_scene):
     ms.save_scene(ball_scene, tmp_path / "scene.msim")
     env = dict(os.environ, PYTHONUNBUFFERED="1")
