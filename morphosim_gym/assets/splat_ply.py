@@ -1,0 +1,128 @@
+"""Standard 3D Gaussian Splatting `.ply` files <-> `Gaussians`.
+
+Fields (per vertex, float32): x, y, z; f_dc_0..2 (degree-0 spherical-harmonic colour);
+opacity (a logit); scale_0..2 (log standard deviations); rot_0..3 (w, x, y, z, unnormalised).
+Higher-order f_rest_* fields are read past and ignored. Binary (either byte order) and ASCII.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..scene.gaussians import Gaussians
+from .atomic import atomic_write
+from .errors import AssetError
+
+__all__ = ["REQUIRED_FIELDS", "SH_C0", "read_splat_ply", "write_splat_ply"]
+
+SH_C0 = 0.28209479177387814   # the degree-0 spherical-harmonic constant
+REQUIRED_FIELDS = ("x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+                   "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3")
+_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+              "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+              "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
+_FORMATS = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": None}
+
+
+def _header(data: bytes, path: str) -> tuple[str, int, list[tuple[str, str]], int]:
+    """(format, vertex count, [(field, numpy type)], header length) of a PLY with one vertex element first."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise AssetError(f"Expected a PLY file, found no 'ply ... end_header' header in {path}")
+    body_start = data.index(b"\n", end) + 1
+    lines = data[:end].decode("ascii", errors="replace").splitlines()
+    fmt, count, fields, element = None, 0, [], None
+    for line in lines:
+        words = line.split()
+        if not words:
+            continue
+        if words[0] == "format":
+            fmt = words[1]
+        elif words[0] == "element":
+            element = words[1]
+            if element == "vertex":
+                count = int(words[2])
+            elif not fields:
+                raise AssetError(f"Expected the vertex element first in {path}, found {element!r}")
+        elif words[0] == "property" and element == "vertex":
+            if words[1] == "list":
+                raise AssetError(f"Expected scalar vertex properties in {path}, found a list property")
+            if words[1] not in _PLY_TYPES:
+                raise AssetError(f"Unknown PLY property type {words[1]!r} in {path}")
+            fields.append((words[2], _PLY_TYPES[words[1]]))
+    if fmt not in _FORMATS:
+        raise AssetError(f"Expected a PLY format in {sorted(_FORMATS)}, found {fmt!r} in {path}")
+    return fmt, count, fields, body_start
+
+
+def read_splat_ply(path: str | os.PathLike, data: bytes | None = None) -> Gaussians:
+    """The Gaussians of a 3DGS `.ply`, in the file's own frame.
+
+    Raises:
+        AssetError: not a PLY, a required field missing (named), a truncated body, or invalid values.
+    """
+    path = str(path)
+    if data is None:
+        try:
+            data = Path(path).read_bytes()
+        except OSError as exc:
+            raise AssetError(f"Cannot read {path}: {exc}") from None
+    fmt, count, fields, start = _header(data, path)
+    names = [f for f, _ in fields]
+    for required in REQUIRED_FIELDS:
+        if required not in names:
+            raise AssetError(f"The 3DGS file {path} has no {required!r} field (found {', '.join(names) or 'none'})")
+    order = _FORMATS[fmt]
+    if order is None:
+        try:
+            table = np.loadtxt(data[start:].decode("ascii").splitlines()[:count], dtype=np.float64, ndmin=2)
+        except ValueError as exc:
+            raise AssetError(f"Unreadable ASCII body in {path}: {exc}") from None
+        if table.shape != (count, len(fields)):
+            raise AssetError(f"Expected {count} rows of {len(fields)} values in {path}, found {table.shape}")
+        col = {f: table[:, i] for i, f in enumerate(names)}
+    else:
+        dtype = np.dtype([(f, order + t) for f, t in fields])
+        if len(data) - start < count * dtype.itemsize:
+            raise AssetError(f"The 3DGS file {path} is truncated: {count} vertices need "
+                             f"{count * dtype.itemsize} bytes, found {len(data) - start}")
+        arr = np.frombuffer(data, dtype=dtype, count=count, offset=start)
+        col = {f: arr[f].astype(np.float64) for f in names}
+    stack = lambda keys: np.stack([col[k] for k in keys], axis=1)
+    quats = stack(("rot_0", "rot_1", "rot_2", "rot_3"))
+    quats[np.linalg.norm(quats, axis=1) < 1e-12] = (1, 0, 0, 0)
+    try:
+        return Gaussians(means=stack(("x", "y", "z")), quats=quats,
+                         scales=np.exp(np.clip(stack(("scale_0", "scale_1", "scale_2")), -30, 30)),
+                         opacities=1.0 / (1.0 + np.exp(-np.clip(col["opacity"], -60, 60))),
+                         colors=np.clip(0.5 + SH_C0 * stack(("f_dc_0", "f_dc_1", "f_dc_2")), 0, 1))
+    except ValueError as exc:
+        raise AssetError(f"Invalid Gaussians in {path}: {exc}") from None
+
+
+def write_splat_ply(path: str | os.PathLike, gaussians: Gaussians) -> Path:
+    """Write `gaussians` as a binary little-endian 3DGS `.ply` (atomically)."""
+    g = gaussians.numpy()
+    n = len(g)
+    dtype = np.dtype([(f, "<f4") for f in REQUIRED_FIELDS])
+    arr = np.empty(n, dtype=dtype)
+    for i, axis in enumerate("xyz"):
+        arr[axis] = g.means[:, i]
+    for i in range(3):
+        arr[f"f_dc_{i}"] = (g.colors[:, i] - 0.5) / SH_C0
+        arr[f"scale_{i}"] = np.log(g.scales[:, i])
+    for i in range(4):
+        arr[f"rot_{i}"] = g.quats[:, i]
+    op = np.clip(g.opacities.astype(np.float64), 1e-6, 1 - 1e-6)
+    arr["opacity"] = np.log(op / (1 - op))
+    header = "ply\nformat binary_little_endian 1.0\n" + f"element vertex {n}\n" + \
+        "".join(f"property float {f}\n" for f in REQUIRED_FIELDS) + "end_header\n"
+
+    def write(f) -> None:
+        f.write(header.encode("ascii"))
+        f.write(arr.tobytes())
+
+    return atomic_write(path, write)
