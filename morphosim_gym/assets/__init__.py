@@ -2,7 +2,7 @@
 
 The layer sits above `scene` and below `generate`: sources found at run time (`sources`), an
 index cached on disk (`AssetIndex`), mesh -> `Gaussians` conversion with a content-hash cache
-(`asset_gaussians`), 3DGS `.ply` files (`read_splat_ply`, `write_splat_ply`, `splat_setting`) and
+(`asset_gaussians`), 3DGS `.ply` files (`read_splat_ply`, `splat_setting`) and
 HDR skies (`load_sky`). Text search takes an embedding function as an argument, so this layer
 never imports `language`.
 """
@@ -17,7 +17,7 @@ from .index import AssetIndex, default_cache_dir
 from .record import AssetRecord
 from .sky import Sky, load_sky
 from .sources import AssetSource, FolderSource, default_sources
-from .splat_ply import read_splat_ply, write_splat_ply
+from .splat_ply import read_splat_ply
 
 __all__ = [
            "CONVERSION_VERSION",
@@ -40,5 +40,4 @@ __all__ = [
            "normals_to_quats",
            "read_splat_ply",
            "splat_setting",
-           "write_splat_ply",
-]
+       ]

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write_text
+from .atomic import atomic_write, atomic_write_text
 from .errors import AssetWarning
 from .record import AssetRecord
 from .search import EmbedFn, rank
@@ -55,6 +55,17 @@ def _read_cache(path: Path) -> dict:
     return data["sources"]
 
 
+def _load_vectors(path: Path | None, n: int) -> np.ndarray | None:
+    if path is None or not path.exists():
+        return None
+    try:
+        vecs = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        warnings.warn(AssetWarning(f"Ignoring damaged cached embeddings {path} ({exc})"), stacklevel=3)
+        return None
+    return vecs if vecs.ndim == 2 and len(vecs) == n and np.all(np.isfinite(vecs)) else None
+
+
 class AssetIndex:
     """The assets of some sources, with lookup, counts and search.
 
@@ -63,8 +74,9 @@ class AssetIndex:
         >>> [r.id for r, _ in index.search("horse", k=3)]   # doctest: +SKIP
     """
 
-    def __init__(self, records: Sequence[AssetRecord]) -> None:
+    def __init__(self, records: Sequence[AssetRecord], cache_dir: str | os.PathLike | None = None) -> None:
         self.records: list[AssetRecord] = list(records)
+        self.cache_dir = Path(cache_dir) if cache_dir is not None else None
         self._by_id = {r.id: r for r in self.records}
         if len(self._by_id) != len(self.records):
             dup = [i for i, n in Counter(r.id for r in self.records).items() if n > 1]
@@ -107,7 +119,7 @@ class AssetIndex:
                 atomic_write_text(path, json.dumps({"version": INDEX_VERSION, "sources": merged}))
             except OSError as exc:
                 warnings.warn(AssetWarning(f"Could not write the asset index cache {path} ({exc})"), stacklevel=2)
-        return cls(records)
+        return cls(records, cache_dir=path.parent)
 
     load = build   # `AssetIndex.load()` reads as "the index, from the cache when it is current"
 
@@ -140,23 +152,40 @@ class AssetIndex:
         return dict(sorted(Counter(r.category for r in self.records).items()))
 
     # ---------------------------------------------------------------- search
-    def embeddings(self, embed: EmbedFn) -> np.ndarray:
-        """Every record's `search_text` embedded by `embed` (computed once per function). [N, D]"""
-        key = embed
-        if key not in self._vectors:
-            vecs = np.asarray(embed([r.search_text for r in self.records]), dtype=np.float32)
-            if vecs.ndim != 2 or len(vecs) != len(self.records):
-                raise ValueError(f"Expected embed() to return [{len(self.records)}, D], found {vecs.shape}")
-            self._vectors[key] = vecs
-        return self._vectors[key]
+    def embeddings(self, embed: EmbedFn, embed_name: str | None = None) -> np.ndarray:
+        """Every record's `search_text` embedded by `embed`, computed once per function. [N, D]
+
+        With `embed_name` (which names the model, e.g. "all-MiniLM-L6-v2") and a cache folder, the
+        vectors are also stored on disk, keyed by the name and the texts.
+        """
+        if embed not in self._vectors:
+            texts = [r.search_text for r in self.records]
+            path = None
+            if embed_name and self.cache_dir is not None:
+                digest = hashlib.sha256(json.dumps([embed_name, texts]).encode()).hexdigest()[:32]
+                path = self.cache_dir / f"embeddings-{digest}.npy"
+            vecs = _load_vectors(path, len(texts))
+            if vecs is None:
+                vecs = np.asarray(embed(texts), dtype=np.float32)
+                if vecs.ndim != 2 or len(vecs) != len(texts):
+                    raise ValueError(f"Expected embed() to return [{len(texts)}, D], found {vecs.shape}")
+                if path is not None:
+                    try:
+                        atomic_write(path, lambda f: np.save(f, vecs))
+                    except OSError as exc:
+                        warnings.warn(AssetWarning(f"Could not cache embeddings in {path} ({exc})"), stacklevel=2)
+            self._vectors[embed] = vecs
+        return self._vectors[embed]
 
     def search(self, query: str | np.ndarray, k: int = 10, *, embed: EmbedFn | None = None,
-               kind: str | None = None) -> list[tuple[AssetRecord, float]]:
+               embed_name: str | None = None, kind: str | None = None) -> list[tuple[AssetRecord, float]]:
         """The `k` assets that best match `query` (text, or an embedding [D] with `embed`), best first.
 
-        Without `embed`, only word and substring matches on name, category and tags count.
+        Without `embed`, only word and substring matches on name, category and tags count; with it,
+        the cosine similarity of the query and each asset's text is added (`embed_name`: see
+        `embeddings`).
         """
-        vectors = self.embeddings(embed) if embed is not None else None
+        vectors = self.embeddings(embed, embed_name) if embed is not None else None
         records = self.records
         if kind is not None:
             mask = np.array([r.kind == kind for r in records], dtype=bool)

@@ -2,7 +2,8 @@
 
 Fields (per vertex, float32): x, y, z; f_dc_0..2 (degree-0 spherical-harmonic colour);
 opacity (a logit); scale_0..2 (log standard deviations); rot_0..3 (w, x, y, z, unnormalised).
-Higher-order f_rest_* fields are read past and ignored. Binary (either byte order) and ASCII.
+Higher-order f_rest_* fields are read past and ignored. Binary (either byte order, any scalar
+type) and ASCII. `morphosim_gym.scene.io.export_ply` writes such files.
 """
 
 from __future__ import annotations
@@ -13,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..scene.gaussians import Gaussians
-from .atomic import atomic_write
 from .errors import AssetError
 
-__all__ = ["REQUIRED_FIELDS", "SH_C0", "read_splat_ply", "write_splat_ply"]
+__all__ = ["REQUIRED_FIELDS", "SH_C0", "read_splat_ply"]
 
 SH_C0 = 0.28209479177387814   # the degree-0 spherical-harmonic constant
 REQUIRED_FIELDS = ("x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
@@ -101,28 +101,3 @@ def read_splat_ply(path: str | os.PathLike, data: bytes | None = None) -> Gaussi
                          colors=np.clip(0.5 + SH_C0 * stack(("f_dc_0", "f_dc_1", "f_dc_2")), 0, 1))
     except ValueError as exc:
         raise AssetError(f"Invalid Gaussians in {path}: {exc}") from None
-
-
-def write_splat_ply(path: str | os.PathLike, gaussians: Gaussians) -> Path:
-    """Write `gaussians` as a binary little-endian 3DGS `.ply` (atomically)."""
-    g = gaussians.numpy()
-    n = len(g)
-    dtype = np.dtype([(f, "<f4") for f in REQUIRED_FIELDS])
-    arr = np.empty(n, dtype=dtype)
-    for i, axis in enumerate("xyz"):
-        arr[axis] = g.means[:, i]
-    for i in range(3):
-        arr[f"f_dc_{i}"] = (g.colors[:, i] - 0.5) / SH_C0
-        arr[f"scale_{i}"] = np.log(g.scales[:, i])
-    for i in range(4):
-        arr[f"rot_{i}"] = g.quats[:, i]
-    op = np.clip(g.opacities.astype(np.float64), 1e-6, 1 - 1e-6)
-    arr["opacity"] = np.log(op / (1 - op))
-    header = "ply\nformat binary_little_endian 1.0\n" + f"element vertex {n}\n" + \
-        "".join(f"property float {f}\n" for f in REQUIRED_FIELDS) + "end_header\n"
-
-    def write(f) -> None:
-        f.write(header.encode("ascii"))
-        f.write(arr.tobytes())
-
-    return atomic_write(path, write)
