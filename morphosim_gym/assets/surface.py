@@ -1,4 +1,4 @@
-"""Area-weighted, seeded samples on a mesh's surface with their normals and colours."""
+"""Area-weighted, seeded, evenly spread samples on a mesh's surface with their normals and colours."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ class SurfaceSamples:
 
 
 def sample_surface(parts: list[MeshPart], triangles: list[np.ndarray], n: int, seed: int = 0) -> SurfaceSamples:
-    """`n` points drawn uniformly by area over every part's triangles.
+    """`n` points spread evenly by area over every part's triangles (see `_stratified`).
 
     Args:
         parts: the materials (and UVs) of each part.
@@ -48,9 +48,7 @@ def sample_surface(parts: list[MeshPart], triangles: list[np.ndarray], n: int, s
     if not np.any(good):
         raise ValueError("Expected a mesh with some area, found only degenerate triangles")
     cdf = np.cumsum(np.where(good, double_area, 0.0))
-    rng = np.random.default_rng(seed)
-    face = np.minimum(np.searchsorted(cdf, rng.random(n) * cdf[-1], side="right"), len(tris) - 1)
-    r1, r2 = rng.random(n), rng.random(n)
+    face, r1, r2 = _stratified(cdf, n, np.random.default_rng(seed))
     s = np.sqrt(r1)
     bary = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)
     points = np.einsum("nk,nkd->nd", bary, tris[face])
@@ -66,6 +64,28 @@ def sample_surface(parts: list[MeshPart], triangles: list[np.ndarray], n: int, s
         colors[sel] = _part_colors(part, local, bary[sel])
         opacities[sel] = part.opacity
     return SurfaceSamples(points, normals, np.clip(colors, 0, 1), opacities, float(cdf[-1] / 2))
+
+
+_R2 = 1.32471795724474602596   # the plastic number: the R2 low-discrepancy sequence's generator
+
+
+def _stratified(cdf: np.ndarray, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Face index and two unit numbers per sample, evenly spread rather than independently random.
+
+    Sample i takes a random position in the i-th of n equal slices of the area CDF (jittered
+    stratification: each face gets its area's share of the budget, within about one sample, with
+    no moire on regular meshes), and the i-th point of the R2 sequence in the unit square, so the
+    samples that share a face cover it evenly; a seeded random shift of the sequence (a
+    Cranley-Patterson rotation) makes each seed a different, equally even pattern. Independent
+    random samples clump and leave holes that show what lies behind a surface.
+    """
+    s1, s2 = rng.random(2)
+    i = np.arange(n, dtype=np.float64)
+    jitter = rng.random(n)
+    face = np.minimum(np.searchsorted(cdf, (i + jitter) / n * cdf[-1], side="right"), len(cdf) - 1)
+    r1 = np.mod(s1 + i / _R2, 1.0)
+    r2 = np.mod(s2 + i / _R2**2, 1.0)
+    return face, r1, r2
 
 
 def _part_colors(part: MeshPart, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:
