@@ -27,9 +27,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from morphosim_gym.assets import AssetError, AssetIndex, AssetWarning, ConversionCache, asset_gaussians  # noqa: E402
-from morphosim_gym.assets.search import lexical_scores  # noqa: E402
-from morphosim_gym.language.vocabulary import CATEGORIES  # noqa: E402
+from morphosim_gym.assets import AssetError, AssetIndex, AssetWarning, ConversionCache, asset_gaussians
+from morphosim_gym.assets.search import lexical_scores
+from morphosim_gym.language.vocabulary import CATEGORIES
 
 TIMED = ["sweethome3d/blendswap-cc-0/horse2", "sweethome3d/scopia/smart-car", "sweethome3d/scopia/bus",
          "sweethome3d/blendswap-cc-by/fordfocus", "sweethome3d/blendswap-cc-0/armchair",
