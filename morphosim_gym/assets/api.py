@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from ..scene.gaussians import Gaussians
 from ..scene.rotations import matrix_to_quat, quat_multiply
 from .cache import ConversionCache
 from .convert import ConversionParams, mesh_to_gaussians, splat_to_object
-from .errors import AssetError
+from .errors import AssetError, AssetWarning
 from .files import MAX_FILE_BYTES, AssetFiles
 from .frame import UP_ROTATIONS, SizeSpec
 from .index import AssetIndex, default_cache_dir
@@ -98,7 +99,10 @@ def asset_gaussians(asset: AssetRecord | str, budget: int = 20000, size_m: SizeS
         except (ValueError, IndexError, ArithmeticError, MemoryError) as exc:
             raise AssetError(f"Cannot convert {files.label} ({type(exc).__name__}: {exc})") from exc
         if store is not None:
-            store.put(key, g)
+            try:
+                store.put(key, g)
+            except OSError as exc:   # a read-only or full disk costs the cache, not the result
+                warnings.warn(AssetWarning(f"Could not cache {record.id} in {store.root} ({exc})"), stacklevel=2)
         return g
     finally:
         files.close()

@@ -42,6 +42,7 @@ class AssetFiles:
     def __init__(self, record: AssetRecord, max_bytes: int = MAX_FILE_BYTES) -> None:
         self.record, self.max_bytes = record, max_bytes
         self._zip: zipfile.ZipFile | None = None
+        self._main: bytes | None = None
         self.warned: set[str] = set()
 
     # ------------------------------------------------------------ the main file
@@ -74,12 +75,14 @@ class AssetFiles:
             raise AssetError(f"Missing asset file {self.label} ({type(exc).__name__}: {exc})") from None
 
     def main(self) -> bytes:
-        """The main file's bytes, after the size check."""
-        size = self.size()
-        if size > self.max_bytes:
-            raise AssetError(f"Refusing {self.label}: {size / 2**20:.1f} MiB is above the "
-                             f"{self.max_bytes / 2**20:.0f} MiB limit for one asset file")
-        return self._read_exact(self.record.member or self.record.path)
+        """The main file's bytes, after the size check (read once)."""
+        if self._main is None:
+            size = self.size()
+            if size > self.max_bytes:
+                raise AssetError(f"Refusing {self.label}: {size / 2**20:.1f} MiB is above the "
+                                 f"{self.max_bytes / 2**20:.0f} MiB limit for one asset file")
+            self._main = self._read_exact(self.record.member or self.record.path)
+        return self._main
 
     def _read_exact(self, name: str) -> bytes:
         try:
@@ -150,6 +153,7 @@ class AssetFiles:
                           stacklevel=4)
 
     def close(self) -> None:
+        self._main = None
         if self._zip is not None:
             self._zip.close()
             self._zip = None

@@ -91,8 +91,8 @@ class AssetIndex:
 
         Args:
             sources: where assets come from.
-            cache_dir: where `index.json` lives (default `default_cache_dir()`); False-y and
-                `refresh` re-read every source.
+            cache_dir: where `index.json` lives (default `default_cache_dir()`); an unwritable
+                folder only costs the caching (a warning).
             refresh: ignore the cached entries (they are rewritten).
         """
         sources = default_sources() if sources is None else list(sources)

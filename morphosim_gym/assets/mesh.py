@@ -31,7 +31,7 @@ class MeshPart:
     Attributes:
         triangles: corner positions in the file's frame. [M, 3, 3]
         uvs: per-corner texture coordinates, or None without a texture. [M, 3, 2]
-        texture: RGB in [0, 1], row 0 at the top (v = 1), or None. [H, W, 3]
+        texture: RGB uint8, row 0 at the top (v = 1), or None. [H, W, 3]
         color: the diffuse colour, used without a texture. [3]
         opacity: the material's opacity in [0, 1].
         face_colors: per-face colours from the file (PLY/vertex colours), or None. [M, 3]
@@ -60,7 +60,7 @@ def _image_array(image) -> np.ndarray | None:
     if image is None:
         return None
     try:
-        arr = np.asarray(image.convert("RGB"), dtype=np.float32) / 255.0
+        arr = np.asarray(image.convert("RGB"), dtype=np.uint8)
     except Exception:  # noqa: BLE001 - a lazily decoded image can still fail here
         return None
     return arr if arr.ndim == 3 and arr.shape[0] > 0 and arr.shape[1] > 0 else None

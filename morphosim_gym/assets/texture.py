@@ -11,7 +11,7 @@ def sample_texture(image: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """Colours of `image` at `uv`, bilinearly interpolated, with the texture repeated outside [0, 1].
 
     Args:
-        image: RGB, row 0 at the top (v = 1). [H, W, 3]
+        image: RGB, row 0 at the top (v = 1): float in [0, 1], or uint8 (read as value / 255). [H, W, 3]
         uv: texture coordinates. [N, 2]
 
     Returns:
@@ -34,6 +34,11 @@ def sample_texture(image: np.ndarray, uv: np.ndarray) -> np.ndarray:
     y0 = y0.astype(np.int64)
     x1, y1 = np.mod(x0 + 1, w), np.clip(y0 + 1, 0, h - 1)
     x0, y0 = np.mod(x0, w), np.clip(y0, 0, h - 1)
-    top = image[y0, x0] * (1 - fx) + image[y0, x1] * fx
-    bottom = image[y1, x0] * (1 - fx) + image[y1, x1] * fx
+    norm = 1.0 / 255.0 if image.dtype == np.uint8 else 1.0
+
+    def texel(yy: np.ndarray, xx: np.ndarray) -> np.ndarray:
+        return image[yy, xx].astype(np.float64) * norm
+
+    top = texel(y0, x0) * (1 - fx) + texel(y0, x1) * fx
+    bottom = texel(y1, x0) * (1 - fx) + texel(y1, x1) * fx
     return (top * (1 - fy) + bottom * fy).astype(np.float32)

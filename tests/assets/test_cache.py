@@ -71,3 +71,11 @@ def test_failed_conversion_writes_nothing(tmp_path):
     with pytest.raises(ValueError, match="bad.obj"):
         asset_gaussians(FolderSource(folder).records()[0], budget=50, cache=cache)
     assert _entries(tmp_path / "conv") == []
+
+
+def test_unwritable_cache_only_costs_the_caching(quad_dir, tmp_path):
+    (tmp_path / "file").write_text("a file where the cache folder should be")
+    cache = ConversionCache(tmp_path / "file" / "conv")
+    with pytest.warns(AssetWarning, match="Could not cache"):
+        g = asset_gaussians(FolderSource(quad_dir).records()[0], budget=50, cache=cache)
+    assert len(g) == 50
