@@ -124,3 +124,13 @@ def test_search_words_then_embeddings():
     assert by_vector[0][0].name == "Sofa"
     with pytest.raises(KeyError, match="did you mean"):
         index.get("t/x")
+
+
+def test_folder_settings_file(quad_dir):
+    (quad_dir / "morphosim_assets.json").write_text('{"up_axis": "z", "unit_scale": 0.01, "licence": "CC0"}')
+    (record,) = FolderSource(quad_dir).records()
+    assert (record.up_axis, record.unit_scale, record.licence) == ("z", 0.01, "CC0")
+    assert FolderSource(quad_dir, up_axis="y").records()[0].up_axis == "y"     # arguments win
+    (quad_dir / "morphosim_assets.json").write_text('{"up": "z"}')
+    with pytest.raises(ValueError, match=r"Unknown key 'up' in .*morphosim_assets.json"):
+        FolderSource(quad_dir)
