@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene.camera import Camera
 from .errors import AssetError
 from .texture import sample_texture
 
@@ -79,6 +80,13 @@ class Sky:
         h = self.image.shape[0]
         uv[:, 1] = np.clip(uv[:, 1], 0.5 / h, 1 - 0.5 / h)   # no wrap over the poles
         return sample_texture(self.image, uv)
+
+    def background(self, camera: Camera) -> np.ndarray:
+        """The sky behind every pixel of `camera`: float32 [H, W, 3]. Composite a render over it
+        with `rgb + (1 - alpha[..., None]) * sky.background(camera)` (render on a black background)."""
+        points = camera.unproject(camera.pixel_centres(), np.ones((camera.height, camera.width)))
+        rays = (points - camera.position).reshape(-1, 3)
+        return self.sky_color(rays).reshape(camera.height, camera.width, 3)
 
 
 def load_sky(path: str | os.PathLike, exposure: float = 1.0) -> Sky:

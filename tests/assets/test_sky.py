@@ -50,3 +50,19 @@ def test_unreadable_panorama_names_the_file(tmp_path):
     (tmp_path / "bad.exr").write_bytes(b"not an exr")
     with pytest.raises(AssetError, match="bad.exr"):
         load_sky(tmp_path / "bad.exr")
+
+
+def test_background_behind_a_camera():
+    from morphosim_gym.scene import Camera
+
+    image = np.zeros((8, 16, 3), dtype=np.float32)
+    image[:4] = (0.2, 0.4, 0.9)                     # the upper half of the sphere
+    image[4:] = (0.3, 0.25, 0.2)                    # the lower half
+    sky = Sky(image)
+    up = Camera.look_at(eye=(0, 0, 0), target=(0, 0, 1), width=8, height=6, fov_y_deg=40, up=(0, 1, 0))
+    np.testing.assert_allclose(sky.background(up), np.broadcast_to((0.2, 0.4, 0.9), (6, 8, 3)), atol=1e-6)
+    level = Camera.look_at(eye=(0, 0, 0), target=(1, 0, 0), width=8, height=6, fov_y_deg=40)
+    bg = sky.background(level)
+    assert bg.shape == (6, 8, 3)
+    np.testing.assert_allclose(bg[0], np.broadcast_to((0.2, 0.4, 0.9), (8, 3)), atol=1e-6)   # top row: sky
+    np.testing.assert_allclose(bg[-1], np.broadcast_to((0.3, 0.25, 0.2), (8, 3)), atol=1e-6)  # bottom: ground
