@@ -56,7 +56,8 @@ def _convert_splat(record: AssetRecord, files: AssetFiles, params: ConversionPar
     return splat_to_object(read_splat_ply(files.label, files.main()), record, params)
 
 
-_CONVERTERS: dict[str, Callable[[AssetRecord, AssetFiles, ConversionParams], Gaussians]] = {
+Converter = Callable[[AssetRecord, AssetFiles, ConversionParams], Gaussians]
+_CONVERTERS: dict[str, Converter] = {
     "mesh": _convert_mesh,
     "splat": _convert_splat,
 }
@@ -88,24 +89,33 @@ def asset_gaussians(asset: AssetRecord | str, budget: int = 20000, size_m: SizeS
     store = default_conversion_cache() if cache is True else (cache or None)
     files = AssetFiles(record, max_bytes=max_bytes)
     try:
-        key = conversion_key(record, params, files) if store is not None else None
-        cached = store.get(key) if store is not None else None
-        if cached is not None:
-            return cached
-        try:
-            g = convert(record, files, params)
-        except AssetError:
-            raise
-        except (ValueError, IndexError, ArithmeticError, MemoryError) as exc:
-            raise AssetError(f"Cannot convert {files.label} ({type(exc).__name__}: {exc})") from exc
-        if store is not None:
-            try:
-                store.put(key, g)
-            except OSError as exc:   # a read-only or full disk costs the cache, not the result
-                warnings.warn(AssetWarning(f"Could not cache {record.id} in {store.root} ({exc})"), stacklevel=2)
+        if store is None:
+            return _convert(convert, record, files, params)
+        key = conversion_key(record, params, files)
+        g = store.get(key)
+        if g is None:
+            g = _convert(convert, record, files, params)
+            _store(store, key, g, record)
         return g
     finally:
         files.close()
+
+
+def _convert(convert: Converter, record: AssetRecord, files: AssetFiles, params: ConversionParams) -> Gaussians:
+    """Run a converter; numerical or shape failures become an `AssetError` naming the file."""
+    try:
+        return convert(record, files, params)
+    except AssetError:
+        raise
+    except (ValueError, IndexError, ArithmeticError, MemoryError) as exc:
+        raise AssetError(f"Cannot convert {files.label} ({type(exc).__name__}: {exc})") from exc
+
+
+def _store(store: ConversionCache, key: str, g: Gaussians, record: AssetRecord) -> None:
+    try:
+        store.put(key, g)
+    except OSError as exc:   # a read-only or full disk costs the cache, not the result
+        warnings.warn(AssetWarning(f"Could not cache {record.id} in {store.root} ({exc})"), stacklevel=3)
 
 
 def splat_setting(path: str | os.PathLike, up_axis: str = "z", unit_scale: float = 1.0) -> Gaussians:

@@ -66,6 +66,23 @@ def _load_vectors(path: Path | None, n: int) -> np.ndarray | None:
     return vecs if vecs.ndim == 2 and len(vecs) == n and np.all(np.isfinite(vecs)) else None
 
 
+def _entry_records(entry: object, fingerprint: str) -> list[AssetRecord] | None:
+    """A cached source entry's records when its fingerprint is current and it parses, else None."""
+    if not isinstance(entry, dict) or entry.get("fingerprint") != fingerprint:
+        return None
+    try:
+        return [AssetRecord.from_dict(d) for d in entry["records"]]
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _write_cache(path: Path, sources: dict) -> None:
+    try:
+        atomic_write_text(path, json.dumps({"version": INDEX_VERSION, "sources": sources}))
+    except OSError as exc:
+        warnings.warn(AssetWarning(f"Could not write the asset index cache {path} ({exc})"), stacklevel=3)
+
+
 class AssetIndex:
     """The assets of some sources, with lookup, counts and search.
 
@@ -102,23 +119,13 @@ class AssetIndex:
         records: list[AssetRecord] = []
         for src in sources:
             key, fp = _source_key(src), _fingerprint_hash(src)
-            entry = cached.get(key)
-            recs = None
-            if isinstance(entry, dict) and entry.get("fingerprint") == fp:
-                try:
-                    recs = [AssetRecord.from_dict(d) for d in entry["records"]]
-                except (KeyError, TypeError, ValueError):
-                    recs = None
+            recs = _entry_records(cached.get(key), fp)
             if recs is None:
                 recs = src.records()
             entries[key] = {"fingerprint": fp, "records": [r.to_dict() for r in recs]}
             records.extend(recs)
-        if entries != {k: cached.get(k) for k in entries} or set(cached) - set(entries):
-            merged = {**cached, **entries}
-            try:
-                atomic_write_text(path, json.dumps({"version": INDEX_VERSION, "sources": merged}))
-            except OSError as exc:
-                warnings.warn(AssetWarning(f"Could not write the asset index cache {path} ({exc})"), stacklevel=2)
+        if any(cached.get(k) != v for k, v in entries.items()):
+            _write_cache(path, {**cached, **entries})
         return cls(records, cache_dir=path.parent)
 
     load = build   # `AssetIndex.load()` reads as "the index, from the cache when it is current"

@@ -58,8 +58,48 @@ def _header(data: bytes, path: str) -> tuple[str, int, list[tuple[str, str]], in
     return fmt, count, fields, body_start
 
 
+def _ascii_columns(data: bytes, start: int, count: int, names: list[str], path: str) -> dict[str, np.ndarray]:
+    try:
+        table = np.loadtxt(data[start:].decode("ascii").splitlines()[:count], dtype=np.float64, ndmin=2)
+    except ValueError as exc:
+        raise AssetError(f"Unreadable ASCII body in {path}: {exc}") from None
+    if table.shape != (count, len(names)):
+        raise AssetError(f"Expected {count} rows of {len(names)} values in {path}, found {table.shape}")
+    return {f: table[:, i] for i, f in enumerate(names)}
+
+
+def _binary_columns(data: bytes, start: int, count: int, fields: list[tuple[str, str]], order: str,
+                    path: str) -> dict[str, np.ndarray]:
+    dtype = np.dtype([(f, order + t) for f, t in fields])
+    if len(data) - start < count * dtype.itemsize:
+        raise AssetError(f"The 3DGS file {path} is truncated: {count} vertices need "
+                         f"{count * dtype.itemsize} bytes, found {len(data) - start}")
+    arr = np.frombuffer(data, dtype=dtype, count=count, offset=start)
+    return {f: arr[f].astype(np.float64) for f, _ in fields}
+
+
+def _activated(col: dict[str, np.ndarray], path: str) -> Gaussians:
+    """3DGS's stored parameters (logit, log scale, SH DC) -> activated `Gaussians`."""
+    def stack(keys: tuple[str, ...]) -> np.ndarray:
+        return np.stack([col[k] for k in keys], axis=1)
+
+    quats = stack(("rot_0", "rot_1", "rot_2", "rot_3"))
+    quats[np.linalg.norm(quats, axis=1) < 1e-12] = (1, 0, 0, 0)
+    try:
+        return Gaussians(means=stack(("x", "y", "z")), quats=quats,
+                         scales=np.exp(np.clip(stack(("scale_0", "scale_1", "scale_2")), -30, 30)),
+                         opacities=1.0 / (1.0 + np.exp(-np.clip(col["opacity"], -60, 60))),
+                         colors=np.clip(0.5 + SH_C0 * stack(("f_dc_0", "f_dc_1", "f_dc_2")), 0, 1))
+    except ValueError as exc:
+        raise AssetError(f"Invalid Gaussians in {path}: {exc}") from None
+
+
 def read_splat_ply(path: str | os.PathLike, data: bytes | None = None) -> Gaussians:
     """The Gaussians of a 3DGS `.ply`, in the file's own frame.
+
+    Args:
+        path: the file (named in errors).
+        data: its bytes, when already read (then `path` is only a label).
 
     Raises:
         AssetError: not a PLY, a required field missing (named), a truncated body, or invalid values.
@@ -72,32 +112,10 @@ def read_splat_ply(path: str | os.PathLike, data: bytes | None = None) -> Gaussi
             raise AssetError(f"Cannot read {path}: {exc}") from None
     fmt, count, fields, start = _header(data, path)
     names = [f for f, _ in fields]
-    for required in REQUIRED_FIELDS:
-        if required not in names:
-            raise AssetError(f"The 3DGS file {path} has no {required!r} field (found {', '.join(names) or 'none'})")
+    missing = [f for f in REQUIRED_FIELDS if f not in names]
+    if missing:
+        raise AssetError(f"The 3DGS file {path} has no {missing[0]!r} field (found {', '.join(names) or 'none'})")
     order = _FORMATS[fmt]
-    if order is None:
-        try:
-            table = np.loadtxt(data[start:].decode("ascii").splitlines()[:count], dtype=np.float64, ndmin=2)
-        except ValueError as exc:
-            raise AssetError(f"Unreadable ASCII body in {path}: {exc}") from None
-        if table.shape != (count, len(fields)):
-            raise AssetError(f"Expected {count} rows of {len(fields)} values in {path}, found {table.shape}")
-        col = {f: table[:, i] for i, f in enumerate(names)}
-    else:
-        dtype = np.dtype([(f, order + t) for f, t in fields])
-        if len(data) - start < count * dtype.itemsize:
-            raise AssetError(f"The 3DGS file {path} is truncated: {count} vertices need "
-                             f"{count * dtype.itemsize} bytes, found {len(data) - start}")
-        arr = np.frombuffer(data, dtype=dtype, count=count, offset=start)
-        col = {f: arr[f].astype(np.float64) for f in names}
-    stack = lambda keys: np.stack([col[k] for k in keys], axis=1)
-    quats = stack(("rot_0", "rot_1", "rot_2", "rot_3"))
-    quats[np.linalg.norm(quats, axis=1) < 1e-12] = (1, 0, 0, 0)
-    try:
-        return Gaussians(means=stack(("x", "y", "z")), quats=quats,
-                         scales=np.exp(np.clip(stack(("scale_0", "scale_1", "scale_2")), -30, 30)),
-                         opacities=1.0 / (1.0 + np.exp(-np.clip(col["opacity"], -60, 60))),
-                         colors=np.clip(0.5 + SH_C0 * stack(("f_dc_0", "f_dc_1", "f_dc_2")), 0, 1))
-    except ValueError as exc:
-        raise AssetError(f"Invalid Gaussians in {path}: {exc}") from None
+    col = _ascii_columns(data, start, count, names, path) if order is None else \
+        _binary_columns(data, start, count, fields, order, path)
+    return _activated(col, path)

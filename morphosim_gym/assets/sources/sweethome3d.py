@@ -52,6 +52,17 @@ def _entries(props: dict[str, str]) -> dict[int, dict[str, str]]:
     return out
 
 
+def _size_and_rotation(e: dict[str, str]) -> tuple[tuple[float, float, float], tuple[float, ...] | None]:
+    """(width, depth, height) in cm and the 9-number model rotation (or None) of one entry."""
+    size_cm = (float(e["width"]), float(e["depth"]), float(e["height"]))
+    if min(size_cm) <= 0:
+        raise ValueError(f"non-positive size {size_cm}")
+    rotation = tuple(float(x) for x in e["modelRotation"].split()) if "modelRotation" in e else None
+    if rotation is not None and len(rotation) != 9:
+        raise ValueError(f"a rotation of {len(rotation)} numbers, not 9")
+    return size_cm, rotation
+
+
 class SweetHome3DSource:
     """Every `.sh3f` catalogue in a folder (default: the Debian `sweethome3d-furniture` one)."""
 
@@ -106,13 +117,9 @@ class SweetHome3DSource:
             warn_skip(where, f"entry #{num} names a model the catalogue does not contain")
             return None
         try:
-            size_cm = (float(e["width"]), float(e["depth"]), float(e["height"]))
-            rotation = tuple(float(x) for x in e["modelRotation"].split()) if "modelRotation" in e else None
+            size_cm, rotation = _size_and_rotation(e)
         except (KeyError, ValueError) as exc:
-            warn_skip(where, f"entry #{num} has a missing or bad size/rotation ({exc})")
-            return None
-        if min(size_cm) <= 0 or (rotation is not None and len(rotation) != 9):
-            warn_skip(where, f"entry #{num} has a non-positive size or a rotation without 9 numbers")
+            warn_skip(where, f"entry #{num} has a missing or bad size or rotation ({exc})")
             return None
         tags = tuple(t.strip().lower() for t in e.get("tags", "").split(",") if t.strip())
         return AssetRecord(
