@@ -27,6 +27,7 @@ __all__ = ["IMAGE_SUFFIXES", "MAX_FILE_BYTES", "AssetFiles"]
 
 MAX_FILE_BYTES = 64 * 1024 * 1024
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".gif", ".tif", ".tiff")
+_DIFFUSE = re.compile(r"^\s*map_Kd\s+(?:-\S+\s+\S+\s+)*(.+?)\s*$", re.MULTILINE | re.IGNORECASE)
 _REFERENCE = re.compile(r"^\s*(?:mtllib|map_Kd|map_Ka|map_d|map_bump|bump)\s+(?:-\S+\s+\S+\s+)*(.+?)\s*$",
                         re.MULTILINE | re.IGNORECASE)
 
@@ -43,6 +44,7 @@ class AssetFiles:
         self.record, self.max_bytes = record, max_bytes
         self._zip: zipfile.ZipFile | None = None
         self._main: bytes | None = None
+        self._diffuse: set[str] | None = None
         self.warned: set[str] = set()
 
     # ------------------------------------------------------------ the main file
@@ -132,6 +134,16 @@ class AssetFiles:
                     stack.append(blob)
         return out
 
+    def diffuse_textures(self) -> set[str]:
+        """The names of the colour textures (`map_Kd`) of the OBJ's materials (computed once)."""
+        if self._diffuse is None:
+            self._diffuse = set()
+            if (self.record.member or self.record.path).lower().endswith(".obj"):
+                for name, blob in self.references(self.main()):
+                    if name.lower().endswith(".mtl"):
+                        self._diffuse |= set(_DIFFUSE.findall(blob.decode("latin-1")))
+        return self._diffuse
+
     def content_hash(self) -> str:
         """sha256 over the main file and every file it refers to (the conversion cache's key part)."""
         main = self.main()
@@ -146,8 +158,8 @@ class AssetFiles:
         return _AssetResolver(self, self.folder)
 
     def warn_texture(self, name: str, reason: str) -> None:
-        """Warn once per texture that it is not used."""
-        if name not in self.warned:
+        """Warn once per colour texture that it is not used (bump and normal maps are never used)."""
+        if name not in self.warned and name in self.diffuse_textures():
             self.warned.add(name)
             warnings.warn(AssetWarning(f"Texture {name!r} of {self.label} {reason}; using the material colour"),
                           stacklevel=4)
