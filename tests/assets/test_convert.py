@@ -121,3 +121,19 @@ def test_huge_mesh_is_bounded_by_the_budget(tmp_path):
         g = asset_gaussians(FolderSource(folder).records()[0], budget=500, cache=False)
     assert len(g) == 500
     np.testing.assert_allclose(np.ptp(g.means, axis=0), [1, 1, 0], atol=0.01)
+
+
+@pytest.mark.parametrize("suffix", ["glb", "ply"])
+def test_glb_and_ply_meshes_keep_their_colours(tmp_path, suffix):
+    import trimesh
+
+    box = trimesh.creation.box(extents=(0.4, 0.2, 0.1))        # in a y-up file: 0.2 tall, 0.1 deep
+    box.visual.vertex_colors = np.tile([255, 0, 0, 255], (len(box.vertices), 1))
+    folder = tmp_path / suffix
+    folder.mkdir()
+    box.export(folder / f"box.{suffix}")
+    (record,) = FolderSource(folder).records()
+    assert record.kind == "mesh"
+    g = asset_gaussians(record, budget=500, cache=False)
+    np.testing.assert_allclose(np.ptp(g.means, axis=0), [0.4, 0.1, 0.2], atol=0.01)
+    np.testing.assert_allclose(g.colors, np.tile([1, 0, 0], (500, 1)), atol=0.01)
