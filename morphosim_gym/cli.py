@@ -19,6 +19,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "morphosim_gym.generate.cli",
     "morphosim_gym.reconstruct.cli",
     "morphosim_gym.scene.cli",
+    "morphosim_gym.assets.cli",
     "morphosim_gym.language.cli",
     "morphosim_gym.viewer.cli",
     "morphosim_gym.bench.cli",

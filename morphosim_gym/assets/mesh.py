@@ -1,0 +1,139 @@
+"""Loading a mesh asset into plain arrays: `MeshPart`s of triangles with their material.
+
+trimesh parses OBJ (with MTL and textures), GLB/GLTF and PLY; each part keeps its triangles in
+the file's frame (scene-graph transforms applied), per-corner UVs when it has a texture, the
+texture as float RGB, and the material's diffuse colour and opacity.
+"""
+
+from __future__ import annotations
+
+import io
+import warnings
+from dataclasses import dataclass
+from pathlib import PurePosixPath
+
+import numpy as np
+import trimesh
+
+from .errors import AssetError
+from .files import AssetFiles
+from .record import AssetRecord
+
+__all__ = ["MeshPart", "load_mesh_parts"]
+
+_FILE_TYPES = {".obj": "obj", ".glb": "glb", ".gltf": "gltf", ".ply": "ply"}
+
+
+@dataclass
+class MeshPart:
+    """Triangles with one material.
+
+    Attributes:
+        triangles: corner positions in the file's frame. [M, 3, 3]
+        uvs: per-corner texture coordinates, or None without a texture. [M, 3, 2]
+        texture: RGB uint8, row 0 at the top (v = 1), or None. [H, W, 3]
+        color: the diffuse colour, used without a texture. [3]
+        opacity: the material's opacity in [0, 1].
+        face_colors: per-face colours from the file (PLY/vertex colours), or None. [M, 3]
+    """
+
+    triangles: np.ndarray
+    uvs: np.ndarray | None
+    texture: np.ndarray | None
+    color: np.ndarray
+    opacity: float = 1.0
+    face_colors: np.ndarray | None = None
+
+
+def _rgba(value, default=(0.7, 0.7, 0.7, 1.0)) -> np.ndarray:
+    if value is None:
+        return np.asarray(default, dtype=np.float64)
+    c = np.asarray(value, dtype=np.float64).ravel()
+    if c.size < 3:
+        return np.asarray(default, dtype=np.float64)
+    if c.max() > 1.0:
+        c = c / 255.0
+    return np.r_[c[:3], c[3] if c.size > 3 else 1.0].clip(0, 1)
+
+
+def _image_array(image) -> np.ndarray | None:
+    if image is None:
+        return None
+    try:
+        arr = np.asarray(image.convert("RGB"), dtype=np.uint8)
+    except Exception:  # noqa: BLE001 - a lazily decoded image can still fail here
+        return None
+    return arr if arr.ndim == 3 and arr.shape[0] > 0 and arr.shape[1] > 0 else None
+
+
+def _material(visual) -> tuple[np.ndarray, np.ndarray | None]:
+    """(diffuse RGBA [4], texture [H, W, 3] or None) of a trimesh visual."""
+    mat = getattr(visual, "material", None)
+    if mat is None:
+        return _rgba(None), None
+    if isinstance(mat, trimesh.visual.material.PBRMaterial):
+        return _rgba(mat.baseColorFactor), _image_array(mat.baseColorTexture)
+    return _rgba(getattr(mat, "diffuse", None)), _image_array(getattr(mat, "image", None))
+
+
+def _part(mesh: trimesh.Trimesh) -> MeshPart | None:
+    faces = np.asarray(mesh.faces)
+    if faces.size == 0:
+        return None
+    verts = np.asarray(mesh.vertices, dtype=np.float64)
+    tris = verts[faces]
+    visual = mesh.visual
+    if isinstance(visual, trimesh.visual.ColorVisuals):
+        colors = (np.asarray(visual.face_colors, dtype=np.float64)[:, :3] / 255.0
+                  if visual.kind in ("face", "vertex") else None)
+        return MeshPart(tris, None, None, _rgba(None)[:3], 1.0, colors)
+    rgba, tex = _material(visual)
+    uv = getattr(visual, "uv", None)
+    uvs = None
+    if tex is not None and uv is not None and len(uv) == len(verts):
+        uvs = np.asarray(uv, dtype=np.float64)[faces]
+    return MeshPart(tris, uvs, tex if uvs is not None else None, rgba[:3], float(rgba[3]))
+
+
+def load_mesh_parts(record: AssetRecord, files: AssetFiles | None = None) -> list[MeshPart]:
+    """The triangles and materials of a mesh asset.
+
+    Raises:
+        AssetError: the file is missing, too large, unparsable or has no triangles (the message
+            names the file).
+    """
+    files = files or AssetFiles(record)
+    name = record.member or record.path
+    file_type = _FILE_TYPES.get(PurePosixPath(name.lower()).suffix)
+    if file_type is None:
+        raise AssetError(f"Expected a mesh file ({', '.join(_FILE_TYPES)}), found {files.label}")
+    data = files.main()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            scene = trimesh.load(io.BytesIO(data), file_type=file_type, resolver=files.resolver(), force="scene",
+                                 process=False)
+        meshes = [m for m in _world_meshes(scene)]
+    except AssetError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - trimesh raises many types for malformed files
+        raise AssetError(f"Cannot parse the mesh {files.label} ({type(exc).__name__}: {exc})") from None
+    parts = [p for p in (_part(m) for m in meshes) if p is not None]
+    if not parts:
+        raise AssetError(f"The mesh {files.label} has no triangles")
+    return parts
+
+
+def _world_meshes(scene: trimesh.Scene) -> list[trimesh.Trimesh]:
+    """Every triangle mesh of a scene with its node transform applied."""
+    out = []
+    for node in scene.graph.nodes_geometry:
+        transform, geom_name = scene.graph[node]
+        geom = scene.geometry.get(geom_name)
+        if not isinstance(geom, trimesh.Trimesh):
+            continue
+        if not np.allclose(transform, np.eye(4)):
+            geom = geom.copy()
+            geom.apply_transform(transform)
+        out.append(geom)
+    return out
