@@ -287,7 +287,7 @@ class EnvViewer(ServedViewer):
         self.max_episodes = int(episodes)
         self.frames: dict[int, dict] = {}
         super().__init__()
-        self.server = viser.ViserServer(host=host, port=int(port), verbose=verbose)
+        self._serve(viser, host, port, verbose)
         self.server.scene.set_up_direction("+z")
         self.server.scene.world_axes.visible = False
         self._frames = FrameWorker(name="morphosim-env-frames")
@@ -302,11 +302,6 @@ class EnvViewer(ServedViewer):
         self._loop.start()
 
     # ================================================================ lifecycle
-    @property
-    def url(self) -> str:
-        host = self.server.get_host()
-        return f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{self.server.get_port()}"
-
     def close(self) -> None:
         if self._closed.is_set():
             return
