@@ -30,7 +30,8 @@ import numpy as np
 from ..errors import CommandError
 from ..scene import Camera, Scene4D
 
-__all__ = ["ViewerSession", "LogEntry", "Snapshot", "UNDO_WORDS", "DEFAULT_MAX_UNDO", "DEFAULT_MAX_LOG", "resolve_source", "resize_keep_fov", "format_log",
+__all__ = ["ViewerSession", "LogEntry", "Snapshot", "UNDO_WORDS", "DEFAULT_MAX_UNDO", "DEFAULT_MAX_LOG",
+           "resolve_source", "resize_keep_fov", "format_log",
            "md_escape"]
 
 DEFAULT_MAX_UNDO = 32     # undo steps a session keeps (edits and replaced scenes together)
