@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import http.client
 import json
-import re
 import socket
 import threading
 import time
@@ -35,8 +34,6 @@ MAX_REPLY_BYTES = 1 << 20      # 1 MiB: a plan is a few kB
 MAX_JSON_DEPTH = 64
 MAX_INT_DIGITS = 30
 _READ_CHUNK = 1 << 16
-_STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.S)
-_BRACKETS = re.compile(r"[\[\]{}]")
 
 
 class EndpointError(BackendUnavailableError):
@@ -220,16 +217,25 @@ def _finite_float(text: str) -> float:
     return value
 
 
+def _depth(value: Any) -> int:
+    """Nesting depth of parsed JSON, without recursion."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (dict, list)):
+            deepest = max(deepest, depth)
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
 def loads_bounded(text: str) -> Any:
     """`json.loads` with at most `MAX_JSON_DEPTH` levels of nesting, integers of at most
-    `MAX_INT_DIGITS` digits and finite numbers only; `ValueError` naming what was refused."""
-    depth = deepest = 0
-    for bracket in _BRACKETS.findall(_STRING.sub("", text)):
-        depth += 1 if bracket in "[{" else -1
-        deepest = max(deepest, depth)
-        if deepest > MAX_JSON_DEPTH:
-            raise ValueError(f"nested deeper than {MAX_JSON_DEPTH} levels")
+    `MAX_INT_DIGITS` digits and finite numbers only; `ValueError` naming what was refused.
+    (The C parser's own recursion limit stops very deep input first, as a `RecursionError`.)"""
     try:
-        return json.loads(text, parse_int=_bounded_int, parse_float=_finite_float, parse_constant=_refuse_constant)
+        value = json.loads(text, parse_int=_bounded_int, parse_float=_finite_float, parse_constant=_refuse_constant)
     except RecursionError:
         raise ValueError(f"nested deeper than {MAX_JSON_DEPTH} levels") from None
+    if _depth(value) > MAX_JSON_DEPTH:
+        raise ValueError(f"nested deeper than {MAX_JSON_DEPTH} levels")
+    return value

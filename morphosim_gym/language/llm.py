@@ -190,9 +190,11 @@ def chat(config: LLMConfig, messages: list[dict], deadline: Optional[Deadline] =
 
 def _extract_json(content: str) -> Any:
     s = content.strip()
-    m = re.search(r"```(?:json)?\s*(.*?)```", s, re.S)
-    if m:
-        s = m.group(1).strip()
+    start = s.find("```")                  # str.find, not a regex: linear on any reply
+    end = s.find("```", start + 3) if start >= 0 else -1
+    if end >= 0:
+        inner = s[start + 3:end]
+        s = (inner[4:] if inner.startswith("json") else inner).strip()
     if not s.startswith("{"):
         a, b = s.find("{"), s.rfind("}")
         if a >= 0 and b > a:

@@ -114,6 +114,10 @@ HOSTILE = {
                                              + "9" * 5000 + "}]}"))),
     "deep JSON (envelope)": send(_http(DEEP)),
     "deep JSON (plan)": send(_http(_reply(DEEP.decode()))),
+    "nested 65 deep (plan)": send(_http(_reply("[" * 65 + "]" * 65))),
+    "escaped quotes flood": send(_http(b'{"choices": "' + b'\\"' * 400_000)),
+    "escaped quotes flood (plan)": send(_http(_reply('{"mode": "' + '\\"' * 200_000))),
+    "open code fence and 900k spaces": send(_http(_reply("```" + " " * 900_000))),
     "Infinity in plan": send(_http(_reply('{"mode": "generate", "objects": [{"noun": "ball", "scale": 1e999}]}'))),
     "plan of wrong types": send(_http(_reply('{"mode": "generate", "objects": "ball", "then": 7, "edits": {}}'))),
     "content not a string": send(_http(b'{"choices": [{"message": {"content": {"a": 1}}}]}')),
@@ -129,11 +133,13 @@ def _config(server, **kw) -> LLMConfig:
 @pytest.mark.parametrize("name", sorted(HOSTILE))
 def test_hostile_replies_fall_back_to_the_rules(name):
     server = RawServer(HOSTILE[name])
+    start = time.perf_counter()
     try:
         plan = parse_llm(TEXT, config=_config(server))
     finally:
         server.close()
     assert plan.backend == "rules" and plan == parse_rules(TEXT)
+    assert time.perf_counter() - start < 3.0       # no reply costs more than reading it once
 
 
 @pytest.mark.parametrize("name", sorted(HOSTILE))
