@@ -19,6 +19,7 @@ import importlib
 import math
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
@@ -26,7 +27,7 @@ import numpy as np
 
 from ..scene import Camera, Gaussians
 from .camera import camera_from_viewer, render_size, viewer_pose, viewer_view
-from .session import md_escape
+from .session import DEFAULT_MAX_LOG, md_escape
 from .lifecycle import ServedViewer
 from .worker import FrameWorker
 
@@ -132,7 +133,7 @@ class EnvRunner:
         self.episode = 0
         self.record: Optional[StepRecord] = None
         self.rewards: list[float] = []
-        self.edit_log: list[tuple[str, bool, str]] = []
+        self.edit_log: deque[tuple[str, bool, str]] = deque(maxlen=DEFAULT_MAX_LOG)   # the newest edits
         self._version = 0
         self.reset()
 
