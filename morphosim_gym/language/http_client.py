@@ -174,13 +174,7 @@ def post_json(url: str, payload: Any, headers: dict[str, str], deadline: Deadlin
         exc.close()
         raise EndpointError(f"LLM endpoint {url} answered HTTP {exc.code}") from None
     except (EndpointError, OSError, http.client.HTTPException, ValueError) as exc:
-        if watchdog.fired or deadline.expired:    # a cut-off read shows up as any of these
-            raise EndpointError(f"LLM endpoint {url} gave no complete reply within {deadline.seconds:g} s") from None
-        if isinstance(exc, EndpointError):
-            raise
-        if isinstance(exc, http.client.HTTPException) and not isinstance(exc, OSError):
-            raise EndpointError(f"LLM endpoint {url} did not answer HTTP ({_short(exc)})") from None
-        raise EndpointError(f"LLM endpoint {url} is unreachable ({_short(exc)})") from None
+        raise _transport_error(exc, url, deadline.seconds, watchdog.fired or deadline.expired) from None
     finally:
         watchdog.cancel()
     if watchdog.fired:            # the body ended because the watchdog shut the socket
@@ -193,6 +187,18 @@ def post_json(url: str, payload: Any, headers: dict[str, str], deadline: Deadlin
         return loads_bounded(text)
     except ValueError as exc:
         raise EndpointError(f"LLM endpoint {url} did not answer usable JSON ({exc})") from None
+
+
+def _transport_error(exc: Exception, url: str, seconds: float, late: bool) -> EndpointError:
+    """What a failure while talking to the endpoint means (`late`: the deadline passed meanwhile,
+    and a read it cut off shows up as any of these)."""
+    if late:
+        return EndpointError(f"LLM endpoint {url} gave no complete reply within {seconds:g} s")
+    if isinstance(exc, EndpointError):
+        return exc
+    if isinstance(exc, http.client.HTTPException) and not isinstance(exc, OSError):
+        return EndpointError(f"LLM endpoint {url} did not answer HTTP ({_short(exc)})")
+    return EndpointError(f"LLM endpoint {url} is unreachable ({_short(exc)})")
 
 
 def _short(exc: BaseException, limit: int = 200) -> str:
