@@ -65,6 +65,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="local path of a CLIP model for text-image similarity (default $MORPHOSIM_CLIP_MODEL)")
     q.add_argument("--qalign-model", default=None,
                    help="local path of a Q-Align model (default $MORPHOSIM_QALIGN_MODEL)")
+    q.add_argument("--trust-remote-code", action="store_true",
+                   help="let the Q-Align model folder's own Python code run (Q-Align needs it; without this flag "
+                        "such a folder is refused)")
     q.set_defaults(func=_quality)
 
 

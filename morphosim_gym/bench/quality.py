@@ -40,6 +40,7 @@ class QualityConfig:
     reconstruction: str = "oracle"
     clip_model: Optional[str] = None
     qalign_model: Optional[str] = None
+    trust_remote_code: bool = False       # let the Q-Align folder's own Python run (it needs it)
 
     def __post_init__(self) -> None:
         if not 96 <= int(self.size) <= 2048:
@@ -100,7 +101,7 @@ def score_prompts(prompts: Sequence[str], cfg: QualityConfig, progress: bool = T
     sim = ms.MorphoSim(reconstruction=cfg.reconstruction, generation=ms.GenerationConfig(detail=cfg.detail))
     brisque = BrisqueScorer()
     clip, clip_why = load_clip(cfg.clip_model)
-    qalign, qalign_why = load_qalign(cfg.qalign_model)
+    qalign, qalign_why = load_qalign(cfg.qalign_model, trust_remote_code=cfg.trust_remote_code)
     images: list[dict] = []
     start = time.perf_counter()
     bar = None
@@ -178,7 +179,8 @@ def quality_main(args: argparse.Namespace) -> int:
     except ValueError:
         raise ValueError(f"Expected --yaws as comma-separated degrees, found {args.yaws!r}") from None
     cfg = QualityConfig(size=args.size, yaws=yaws, times=args.times, seed=args.seed, detail=args.detail,
-                        reconstruction=args.reconstruction, clip_model=args.clip_model, qalign_model=args.qalign_model)
+                        reconstruction=args.reconstruction, clip_model=args.clip_model, qalign_model=args.qalign_model,
+                        trust_remote_code=bool(getattr(args, "trust_remote_code", False)))
     data = score_prompts(read_prompts(args.prompts), cfg)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

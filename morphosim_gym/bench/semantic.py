@@ -11,6 +11,8 @@ quality report prints "unavailable" with the reason.
 - Q-Align: a Q-Align checkpoint folder whose remote code provides `model.score(images,
   task_=..., input_="image")` (as the published one-align model does); gives "quality" and
   "aesthetic" on a 1-5 scale. Untested here: no such model is available offline.
+  Its Python files run when it loads, so a folder that ships code is refused unless asked
+  with ``trust_remote_code=True`` (``morphosim quality --trust-remote-code``).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["ClipScorer", "load_clip", "load_qalign", "CLIP_ENV", "QALIGN_ENV"]
+__all__ = ["ClipScorer", "load_clip", "load_qalign", "remote_code_files", "CLIP_ENV", "QALIGN_ENV"]
 
 CLIP_ENV = "MORPHOSIM_CLIP_MODEL"
 QALIGN_ENV = "MORPHOSIM_QALIGN_MODEL"
@@ -90,17 +92,44 @@ def load_clip(path: Optional[str] = None) -> tuple[Optional[ClipScorer], Optiona
 QAlignScore = Callable[[Sequence[np.ndarray], str], list]
 
 
-def load_qalign(path: Optional[str] = None) -> tuple[Optional[QAlignScore], Optional[str]]:
+def remote_code_files(folder: Path) -> list[str]:
+    """What in a model folder would run as Python when transformers loads it: its ``.py`` files,
+    and ``auto_map`` classes named by its ``config.json``."""
+    import json
+
+    found = sorted(p.name for p in Path(folder).glob("*.py"))
+    try:
+        config = json.loads((Path(folder) / "config.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        config = {}
+    auto_map = config.get("auto_map") if isinstance(config, dict) else None
+    if auto_map:
+        found.append("config.json auto_map")
+    return found
+
+
+def load_qalign(path: Optional[str] = None, trust_remote_code: bool = False
+                ) -> tuple[Optional[QAlignScore], Optional[str]]:
     """A Q-Align scorer `(images, task) -> scores` from `path` (or `$MORPHOSIM_QALIGN_MODEL`), or None
-    and why not; `task` is "quality" or "aesthetic"."""
+    and why not; `task` is "quality" or "aesthetic".
+
+    Raises:
+        ValueError: the folder ships Python code (Q-Align does) and `trust_remote_code` is False.
+    """
     folder, why = _model_dir(path, QALIGN_ENV)
     if folder is None:
         return None, why
+    code = remote_code_files(folder)
+    if code and not trust_remote_code:
+        raise ValueError(f"Expected --trust-remote-code (Python: trust_remote_code=True) to load the Q-Align model "
+                         f"in {str(folder)!r}, found it off: the folder ships Python code that loading runs "
+                         f"({', '.join(code[:5])}); pass it only if you trust that folder")
     try:
         from PIL import Image
         from transformers import AutoModelForCausalLM
 
-        model = AutoModelForCausalLM.from_pretrained(str(folder), trust_remote_code=True, local_files_only=True)
+        model = AutoModelForCausalLM.from_pretrained(str(folder), trust_remote_code=bool(trust_remote_code),
+                                                     local_files_only=True)
     except Exception as exc:
         return None, f"could not load Q-Align from {str(folder)!r}: {type(exc).__name__}: {exc}"
 

@@ -7,7 +7,7 @@ Configuration (`LLMConfig`), from a YAML/dict config or the environment:
 | base_url | MORPHOSIM_LLM_BASE_URL | none | e.g. ``http://127.0.0.1:8000/v1`` (``/chat/completions`` is appended) |
 | model | MORPHOSIM_LLM_MODEL | none | model name sent in the request |
 | api_key | MORPHOSIM_LLM_API_KEY | none | sent as ``Authorization: Bearer ...`` when set |
-| timeout_s | MORPHOSIM_LLM_TIMEOUT_S | 30 | per request |
+| timeout_s | MORPHOSIM_LLM_TIMEOUT_S | 30 | wall clock of the whole parse: connecting, every read, every retry |
 | fallback | MORPHOSIM_LLM_FALLBACK | "rules" | after a failure: "rules" (use the rule parser) or "raise" |
 | max_retries | MORPHOSIM_LLM_MAX_RETRIES | 1 | extra attempts after an invalid answer, each told the validation error |
 | temperature | | 0.0 | sampling temperature |
@@ -17,7 +17,11 @@ example made by the rule parser, so it never drifts from the code) -> `Plan.from
 edit targets are resolved against the scene like the rule parser's -> on a validation error, ask
 again once with the error -> then fall back to the rules or raise `CommandError`. A network or HTTP
 failure falls back too, or raises `BackendUnavailableError` with ``fallback="raise"``.
-Only the standard library is used (urllib).
+
+The endpoint is not trusted (see `http_client`): one deadline bounds the whole parse, replies
+over 1 MiB are refused unread, malformed, binary, truncated, deeply nested or huge-number
+replies are errors naming the problem (never a raw exception), and a long reply is not sent
+back to the model on retry. Only the standard library is used (urllib).
 """
 
 from __future__ import annotations
@@ -25,18 +29,20 @@ from __future__ import annotations
 import json
 import os
 import re
-import urllib.error
-import urllib.request
 from dataclasses import dataclass, fields, replace
-from typing import Any, Mapping
+from typing import Any, Mapping, Optional
 
 from ..errors import BackendUnavailableError, CommandError
+from .http_client import Deadline, loads_bounded, post_json
 from .grounding import ALL_WORDS, ground_noun, resolve_in_scene, scene_items
 from .plan import CAMERA_DIRECTIONS, EDIT_OPS, PATHS, RECOLOR_MODES, Plan
 from .rules import EXAMPLES, parse_rules
 from .vocabulary import CATEGORIES, SETTINGS
 
 __all__ = ["LLMConfig", "parse_llm", "system_prompt", "chat"]
+
+RESEND_CHARS = 8000      # a previous reply longer than this is not sent back to the model on retry
+ERROR_CHARS = 300        # the validation error told to the model on retry is cut to this length
 
 _ENV = {"base_url": "MORPHOSIM_LLM_BASE_URL", "model": "MORPHOSIM_LLM_MODEL", "api_key": "MORPHOSIM_LLM_API_KEY",
         "timeout_s": "MORPHOSIM_LLM_TIMEOUT_S", "fallback": "MORPHOSIM_LLM_FALLBACK",
@@ -157,31 +163,22 @@ def _user_message(text: str, scene: Any) -> str:
     return msg
 
 
-def chat(config: LLMConfig, messages: list[dict]) -> str:
-    """One chat-completions request; returns the message content.
+def chat(config: LLMConfig, messages: list[dict], deadline: Optional[Deadline] = None) -> str:
+    """One chat-completions request, within `deadline` (default: `config.timeout_s` from now);
+    returns the message content.
 
     Raises:
-        BackendUnavailableError: not configured, unreachable, HTTP error, or a reply without content.
+        BackendUnavailableError: not configured, unreachable, too slow, HTTP error, or a reply that
+            is not the expected JSON (the message says which).
     """
     if not config.configured:
         raise BackendUnavailableError("No LLM endpoint configured: set MORPHOSIM_LLM_BASE_URL and MORPHOSIM_LLM_MODEL "
                                       "(or llm.base_url / llm.model in the config)")
     url = config.base_url.rstrip("/") + "/chat/completions"
-    body = json.dumps({"model": config.model, "messages": messages, "temperature": config.temperature,
-                       "response_format": {"type": "json_object"}}).encode("utf-8")
-    headers = {"Content-Type": "application/json"}
-    if config.api_key:
-        headers["Authorization"] = f"Bearer {config.api_key}"
-    req = urllib.request.Request(url, data=body, headers=headers, method="POST")
-    try:
-        with urllib.request.urlopen(req, timeout=config.timeout_s) as resp:
-            payload = json.loads(resp.read().decode("utf-8"))
-    except urllib.error.HTTPError as exc:
-        raise BackendUnavailableError(f"LLM endpoint {url} answered HTTP {exc.code}") from None
-    except (urllib.error.URLError, TimeoutError, OSError) as exc:
-        raise BackendUnavailableError(f"LLM endpoint {url} is unreachable ({exc})") from None
-    except json.JSONDecodeError:
-        raise BackendUnavailableError(f"LLM endpoint {url} did not answer JSON") from None
+    body = {"model": config.model, "messages": messages, "temperature": config.temperature,
+            "response_format": {"type": "json_object"}}
+    headers = {"Authorization": f"Bearer {config.api_key}"} if config.api_key else {}
+    payload = post_json(url, body, headers, deadline or Deadline(config.timeout_s))
     try:
         content = payload["choices"][0]["message"]["content"]
     except (KeyError, IndexError, TypeError):
@@ -193,17 +190,19 @@ def chat(config: LLMConfig, messages: list[dict]) -> str:
 
 def _extract_json(content: str) -> Any:
     s = content.strip()
-    m = re.search(r"```(?:json)?\s*(.*?)```", s, re.S)
-    if m:
-        s = m.group(1).strip()
+    start = s.find("```")                  # str.find, not a regex: linear on any reply
+    end = s.find("```", start + 3) if start >= 0 else -1
+    if end >= 0:
+        inner = s[start + 3:end]
+        s = (inner[4:] if inner.startswith("json") else inner).strip()
     if not s.startswith("{"):
         a, b = s.find("{"), s.rfind("}")
         if a >= 0 and b > a:
             s = s[a:b + 1]
     try:
-        return json.loads(s)
-    except json.JSONDecodeError as exc:
-        raise CommandError(f"the reply is not JSON ({exc})") from None
+        return loads_bounded(s)
+    except ValueError as exc:
+        raise CommandError(f"the reply is not usable JSON ({exc})") from None
 
 
 def _finish(plan: Plan, text: str, scene: Any, require_scene: bool, top: bool = True) -> Plan:
@@ -244,6 +243,30 @@ def _finish(plan: Plan, text: str, scene: Any, require_scene: bool, top: bool = 
     return Plan.from_dict({**replace(head, then=then, text=text).to_dict()})
 
 
+def _plan_from_reply(content: str, text: str, scene: Any, require_scene: bool) -> Plan:
+    """The plan in a reply's content; `CommandError` naming the problem for anything else."""
+    data = _extract_json(content)
+    try:
+        plan = Plan.from_dict(data)
+        return _finish(plan, text, scene, require_scene)
+    except CommandError:
+        raise
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError, RecursionError) as exc:
+        message = f"{type(exc).__name__}: {exc}"
+        raise CommandError(f"the reply is not a valid plan ({message[:ERROR_CHARS]})") from None
+
+
+def _retry_messages(content: str, error: Exception) -> list[dict]:
+    """What is added to the conversation to ask again: the reply (unless it is long) and its error."""
+    problem = str(error)[:ERROR_CHARS]
+    if len(content) <= RESEND_CHARS:
+        return [{"role": "assistant", "content": content},
+                {"role": "user", "content": f"That JSON is not a valid plan: {problem}. Reply with the corrected "
+                                            f"JSON object only."}]
+    return [{"role": "user", "content": f"Your reply ({len(content)} characters) was not a valid plan: {problem}. "
+                                        f"Reply with one short JSON object only."}]
+
+
 def parse_llm(text: str, scene: Any = None, config: LLMConfig | None = None, require_scene: bool = False) -> Plan:
     """Parse with the LLM backend (see the module docstring for retries and fallback).
 
@@ -256,21 +279,18 @@ def parse_llm(text: str, scene: Any = None, config: LLMConfig | None = None, req
     config = config or LLMConfig.from_env()
     messages = [{"role": "system", "content": system_prompt()}, {"role": "user", "content": _user_message(text, scene)}]
     last_error: Exception | None = None
+    deadline = Deadline(config.timeout_s)            # one limit for every attempt together
     for attempt in range(1 + config.max_retries):
         try:
-            content = chat(config, messages)
+            content = chat(config, messages, deadline)
         except BackendUnavailableError as exc:
             last_error = exc
             break
         try:
-            data = _extract_json(content)
-            plan = Plan.from_dict(data)
-            return _finish(plan, text, scene, require_scene)
+            return _plan_from_reply(content, text, scene, require_scene)
         except CommandError as exc:
             last_error = exc
-            messages = messages + [{"role": "assistant", "content": content},
-                                   {"role": "user", "content": f"That JSON is not a valid plan: {exc}. Reply with the "
-                                                               f"corrected JSON object only."}]
+            messages = messages + _retry_messages(content, exc)
     if config.fallback == "rules":
         return parse_rules(text, scene, require_scene)
     if isinstance(last_error, BackendUnavailableError):

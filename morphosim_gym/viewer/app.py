@@ -19,6 +19,7 @@ import math
 import re
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Optional
@@ -35,6 +36,7 @@ from .worker import FrameWorker
 __all__ = ["SceneViewer", "FrameInfo", "import_viser", "PIP_HINT"]
 
 PIP_HINT = 'pip install "morphosim-gym[viewer]"'
+MAX_LATENCIES = 1000      # command latencies a viewer keeps
 
 
 def import_viser() -> Any:
@@ -103,7 +105,8 @@ class SceneViewer(ServedViewer):
         self.record_dir = Path(record_dir)
         self.record_long_side = int(record_long_side)
         self.play_fps = float(play_fps)
-        self.latencies: list[dict] = []      # one per command: text received -> first frame of the result sent
+        # one per command (the newest MAX_LATENCIES): text received -> first frame of the result sent
+        self.latencies: deque[dict] = deque(maxlen=MAX_LATENCIES)
         self.frames: dict[int, FrameInfo] = {}
         self._command_lock = threading.Lock()
         self._pending: Optional[dict] = None
@@ -112,7 +115,7 @@ class SceneViewer(ServedViewer):
         self._object_boxes: list[Any] = []
         self._object_key: tuple = ()
 
-        self.server = viser.ViserServer(host=host, port=int(port), verbose=verbose)
+        self._serve(viser, host, port, verbose)
         self.server.scene.set_up_direction("+z")
         self.server.scene.world_axes.visible = False
         self._frames = FrameWorker(on_error=self._frame_failed)
@@ -125,18 +128,6 @@ class SceneViewer(ServedViewer):
         self._player.start()
 
     # ================================================================ lifecycle
-    @property
-    def port(self) -> int:
-        """The port the server listens on."""
-        return self.server.get_port()
-
-    @property
-    def url(self) -> str:
-        """The page's address."""
-        host = self.server.get_host()
-        host = "127.0.0.1" if host in ("0.0.0.0", "") else host
-        return f"http://{host}:{self.port}"
-
     def close(self) -> None:
         """Stop playing, rendering and serving."""
         if self._closed.is_set():

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Any, Optional
 
@@ -28,7 +29,7 @@ import numpy as np
 from ..policies import Act, PolicyFactory, policy_for_episode, resolve_policy
 from ..scene import Camera, Gaussians
 from .camera import camera_from_viewer, render_size, viewer_pose, viewer_view
-from .session import md_escape
+from .session import DEFAULT_MAX_LOG, md_escape
 from .lifecycle import ServedViewer
 from .worker import FrameWorker
 
@@ -101,7 +102,7 @@ class EnvRunner:
         self.episode = 0
         self.record: Optional[StepRecord] = None
         self.rewards: list[float] = []
-        self.edit_log: list[tuple[str, bool, str]] = []
+        self.edit_log: deque[tuple[str, bool, str]] = deque(maxlen=DEFAULT_MAX_LOG)   # the newest edits
         self._version = 0
         self.reset()
 
@@ -259,7 +260,7 @@ class EnvViewer(ServedViewer):
         self.max_episodes = int(episodes)
         self.frames: dict[int, dict] = {}
         super().__init__()
-        self.server = viser.ViserServer(host=host, port=int(port), verbose=verbose)
+        self._serve(viser, host, port, verbose)
         self.server.scene.set_up_direction("+z")
         self.server.scene.world_axes.visible = False
         self._frames = FrameWorker(name="morphosim-env-frames")
@@ -274,11 +275,6 @@ class EnvViewer(ServedViewer):
         self._loop.start()
 
     # ================================================================ lifecycle
-    @property
-    def url(self) -> str:
-        host = self.server.get_host()
-        return f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{self.server.get_port()}"
-
     def close(self) -> None:
         if self._closed.is_set():
             return

@@ -20,6 +20,7 @@ import math
 import re
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
@@ -29,8 +30,12 @@ import numpy as np
 from ..errors import CommandError
 from ..scene import Camera, Scene4D
 
-__all__ = ["ViewerSession", "LogEntry", "Snapshot", "UNDO_WORDS", "resolve_source", "resize_keep_fov", "format_log",
+__all__ = ["ViewerSession", "LogEntry", "Snapshot", "UNDO_WORDS", "DEFAULT_MAX_UNDO", "DEFAULT_MAX_LOG",
+           "resolve_source", "resize_keep_fov", "format_log",
            "md_escape"]
+
+DEFAULT_MAX_UNDO = 32     # undo steps a session keeps (edits and replaced scenes together)
+DEFAULT_MAX_LOG = 256     # typed commands it keeps in its log
 
 # Typed commands that mean "undo" rather than a language edit.
 UNDO_WORDS = ("undo", "undo that", "undo the last edit", "go back")
@@ -95,11 +100,20 @@ class ViewerSession:
         sim: the `MorphoSim` that edits scenes and generates new ones; default
             `MorphoSim(reconstruction="oracle")` (instant scenes from the generator's ground truth).
         seed: seed of scenes generated from typed prompts.
+        max_undo: undo steps kept, edits and replaced scenes together (older ones are forgotten:
+            the scene `max_undo` steps back loses its parent), so memory stays bounded however
+            long the session runs.
+        max_log: commands kept in `log` (the newest).
     """
 
-    def __init__(self, scene: Scene4D, sim: Any = None, seed: int = 0) -> None:
+    def __init__(self, scene: Scene4D, sim: Any = None, seed: int = 0, max_undo: int = DEFAULT_MAX_UNDO,
+                 max_log: int = DEFAULT_MAX_LOG) -> None:
         if not isinstance(scene, Scene4D):
             raise ValueError(f"Expected a Scene4D, found {type(scene).__name__}")
+        for name, value in (("max_undo", max_undo), ("max_log", max_log)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 10_000:
+                raise ValueError(f"Expected {name} as an integer in [1, 10000], found {value!r}")
+        self.max_undo = max_undo
         if sim is None:
             from ..pipeline import MorphoSim
 
@@ -112,14 +126,15 @@ class ViewerSession:
         self._t = 0.0
         self._hidden: frozenset[int] = frozenset()
         self._version = 0
-        self._log: list[LogEntry] = []
+        self._log: deque[LogEntry] = deque(maxlen=max_log)
         self._replaced: list[Scene4D] = []       # scenes replaced by generate commands, for undo
         self._listeners: list[Callable[[str], None]] = []
+        self._trim_undo()
 
     @classmethod
-    def from_source(cls, source: str, sim: Any = None, seed: int = 0) -> "ViewerSession":
+    def from_source(cls, source: str, sim: Any = None, seed: int = 0, **limits: int) -> "ViewerSession":
         """A session on a scene file (`.msim`, or a `morphosim generate` output directory), or on
-        the scene generated from a prompt."""
+        the scene generated from a prompt; `limits`: `max_undo`, `max_log`."""
         if not isinstance(source, str) or not source.strip():
             raise ValueError(f"Expected a scene file or a prompt, found {source!r}")
         path = resolve_source(source)
@@ -130,8 +145,8 @@ class ViewerSession:
         if path is not None:
             from ..scene import load_scene
 
-            return cls(load_scene(path), sim, seed)
-        return cls(sim.generate(source, seed=int(seed)), sim, seed)
+            return cls(load_scene(path), sim, seed, **limits)
+        return cls(sim.generate(source, seed=int(seed)), sim, seed, **limits)
 
     # ------------------------------------------------------------------ state
     @property
@@ -156,7 +171,7 @@ class ViewerSession:
 
     @property
     def log(self) -> tuple[LogEntry, ...]:
-        """Every command typed so far, in order."""
+        """The commands typed so far (the newest `max_log`), in order."""
         with self._lock:
             return tuple(self._log)
 
@@ -228,6 +243,7 @@ class ViewerSession:
                 self._hidden = frozenset()
                 self._t = 0.0
             self._set_scene(new)
+            self._trim_undo()
             entry = self._record(LogEntry(text, kind, True, _describe(kind, seconds, new), seconds), notify=False)
         self._changed("scene")
         return entry
@@ -256,6 +272,24 @@ class ViewerSession:
         self._hidden = frozenset(i for i in self._hidden if i in ids)
         self._t = min(self._t, scene.duration)
         self._version += 1
+
+    def _trim_undo(self) -> None:
+        """Keep at most `max_undo` undo steps: the current scene's edits first, then the replaced
+        scenes, newest first (each one step plus its own edits)."""
+        budget = self.max_undo - _cut_history(self._scene, self.max_undo)
+        kept: list[Scene4D] = []
+        for scene in reversed(self._replaced):
+            if budget <= 0:
+                break
+            budget -= 1 + _cut_history(scene, budget - 1)
+            kept.append(scene)
+        self._replaced = kept[::-1]
+
+    @property
+    def undo_depth(self) -> int:
+        """Undo steps available now (at most `max_undo`)."""
+        with self._lock:
+            return sum(1 + _history_depth(s) for s in self._replaced) + _history_depth(self._scene)
 
     def _record(self, entry: LogEntry, notify: bool = True) -> LogEntry:
         with self._lock:
@@ -377,6 +411,25 @@ class ViewerSession:
             except CommandError:
                 pass
         return time.perf_counter() - start
+
+
+def _history_depth(scene: Scene4D) -> int:
+    """How many times `scene` can be undone."""
+    depth = 0
+    while scene.parent is not None:
+        scene, depth = scene.parent, depth + 1
+    return depth
+
+
+def _cut_history(scene: Scene4D, depth: int) -> int:
+    """Forget the edits of `scene` older than `depth` steps (the scene `depth` edits back loses its
+    parent, so the older scenes can be freed); returns the steps kept."""
+    for kept in range(max(depth, 0)):
+        if scene.parent is None:
+            return kept
+        scene = scene.parent
+    scene.parent = None
+    return max(depth, 0)
 
 
 def resize_keep_fov(camera: Camera, width: int, height: int) -> Camera:
