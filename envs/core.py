@@ -144,9 +144,10 @@ class MorphoSimEnv(gym.Env):
             raise ValueError(f"Expected a task of kind {self.task_kind!r} for this env, found {self._task.kind!r}")
         self._rig = self._task.make_rig()
         if sim is None:
-            import morphosim_gym as ms
+            from morphosim_gym.generate.compose import GenerationConfig
+            from morphosim_gym.pipeline import MorphoSim
 
-            sim = ms.MorphoSim(reconstruction=reconstruction, generation=ms.GenerationConfig(detail=float(detail)))
+            sim = MorphoSim(reconstruction=reconstruction, generation=GenerationConfig(detail=float(detail)))
         self._sim = sim
         self._source = SceneSource(sim)
         cams = tuple(cameras) if cameras is not None else self._task.default_cameras

@@ -18,7 +18,7 @@ _KIND_ENTRY = {
 
 def _make_one(env_id: str, kwargs: dict, wrappers: Sequence[Callable[[gym.Env], gym.Env]]) -> Callable[[], gym.Env]:
     def thunk() -> gym.Env:
-        import morphosim_gym  # noqa: F401  (registers the ids in a spawned worker)
+        import morphosim_gym.envs  # noqa: F401  (registers the ids in a spawned worker)
 
         env = gym.make(env_id, **kwargs)
         for w in wrappers:

@@ -62,12 +62,13 @@ def _text(exc: BaseException) -> str:
 
 def make_sim(suite: Suite, cache_dir: Optional[str]) -> Any:
     """The suite's `MorphoSim`, caching generated scenes on disk under `cache_dir` (None = default)."""
-    import morphosim_gym as ms
+    from morphosim_gym.generate.compose import GenerationConfig
+    from morphosim_gym.pipeline import MorphoSim
 
     kw = suite.env_kwargs
-    return ms.MorphoSim(reconstruction=kw.get("reconstruction", "oracle"),
-                        generation=ms.GenerationConfig(detail=float(kw.get("detail", 0.35))),
-                        cache=True, cache_dir=cache_dir)
+    return MorphoSim(reconstruction=kw.get("reconstruction", "oracle"),
+                     generation=GenerationConfig(detail=float(kw.get("detail", 0.35))),
+                     cache=True, cache_dir=cache_dir)
 
 
 class EpisodeRunner:
@@ -89,7 +90,7 @@ class EpisodeRunner:
         if self._env is None:
             import gymnasium as gym
 
-            import morphosim_gym  # noqa: F401  (registers the ids)
+            import morphosim_gym.envs  # noqa: F401  (registers the ids)
 
             kw = {k: v for k, v in self.suite.env_kwargs.items() if k not in ("detail", "reconstruction")}
             self._env = gym.make(self.suite.env_id, task=self.suite.task, sim=self.sim, on_edit_error="raise",
