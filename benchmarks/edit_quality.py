@@ -28,7 +28,6 @@ import numpy as np
 
 import morphosim_gym as ms
 from _bars import bar_line, write_json
-from morphosim_gym.edit import scene_centre
 from morphosim_gym.generate.examples import PAPER_SCENES
 from morphosim_gym.metrics import delta_e, mean_lab, psnr, rgb_to_lab
 from morphosim_gym.reconstruct import ReconstructionConfig
@@ -39,7 +38,7 @@ BARS = {"precision": 0.95, "recall": 0.95, "delta_e": 15.0, "outside_psnr": 45.0
 def views(scene: ms.Scene4D, t: float) -> list[ms.Camera]:
     """The generation camera at time t and two novel views around the scene centre."""
     cam = scene.camera_at(t)
-    centre = scene_centre(scene, t)
+    centre = scene.centre(t)
     return [cam, cam.orbit(20.0, centre), cam.orbit(-30.0, centre)]
 
 

@@ -111,12 +111,12 @@ def breakdown(repeats: int = 300) -> dict:
     times = np.linspace(0.0, scene.duration, repeats)
     out = {
         "gaussians": len(scene.gaussians),
-        "skinning scene._at_shared(t)": timed(lambda i: scene._at_shared(float(times[i]) * 0.999 + 1e-6 * i)),
+        "skinning scene.at(t)": timed(lambda i: scene.at(float(times[i]) * 0.999 + 1e-6 * i)),
         "camera from MuJoCo": timed(lambda i: u.rig.camera("eye", 84, 84)),
         "rig kinematics (apply)": timed(lambda i: u.rig.apply(a, u.dt)),
     }
     cam = u.rig.camera("eye", 84, 84)
-    g = scene._at_shared(1.0)
+    g = scene.at(1.0)
     out["render 84x84 (ms.render)"] = timed(lambda i: ms.render(g, cam, background=scene.background))
     _, view = u._render(u.world.t)                     # the task camera's view, as a step hands it to the task
     out["task evaluate (reward)"] = timed(lambda i: u.task.measure(u.world, u.rig, view))

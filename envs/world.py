@@ -38,19 +38,13 @@ class SceneWorld:
         self._index = self._original_index = np.flatnonzero(scene.gaussians.object_ids == target.id)
         if self._index.size == 0:
             raise ValueError(f"Expected Gaussians for the target {target.name!r}, found none")
-        g0 = scene._at_shared(0.0)
+        g0 = scene.at(0.0)
         pts = g0.means[self._index].astype(np.float64)
         c = pts.mean(axis=0)
         self.target_radius = float(np.linalg.norm(pts - c, axis=1).max())
         self.target_floor = float(pts[:, 2].min())
-        cam = scene.camera
-        others = [o for o in scene.objects if o.role != "background"]
-        centres = [scene.object_center(o.id, 0.0) for o in others] or [c]
-        centroid = np.mean(centres, axis=0)
-        fwd = cam.forward
-        along = max(float((centroid - cam.position) @ fwd), 1e-3)
-        self.focus = cam.position + along * fwd
-        self.extent = float(np.linalg.norm(self.focus - cam.position))
+        self.focus = scene.centre(0.0)
+        self.extent = float(np.linalg.norm(self.focus - scene.camera.position))
         self.ground_z = 0.0
 
     # ------------------------------------------------------------ the scene
@@ -76,7 +70,7 @@ class SceneWorld:
 
     def gaussians(self, t: Optional[float] = None) -> Gaussians:
         """World Gaussians at time t (default now); cached, not to be modified."""
-        return self._scene._at_shared(self.t if t is None else t)
+        return self._scene.at(self.t if t is None else t)
 
     # ------------------------------------------------------------ the target
     @property
@@ -102,6 +96,5 @@ class SceneWorld:
         scene = self._scene if self._index.size else self._original
         index = self._index if self._index.size else self._original_index
         times = np.linspace(0.0, self.duration, n)
-        out = np.array([scene._at_shared(float(t)).means[index].mean(axis=0, dtype=np.float64) for t in times])
-        scene._at_shared(self.t)            # leave the scene's cache at the current time
+        out = np.array([scene.at(float(t)).means[index].mean(axis=0, dtype=np.float64) for t in times])
         return out

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 import morphosim_gym as ms
-from morphosim_gym.edit import scene_centre
 from morphosim_gym.generate.cli import write_video
 from morphosim_gym.generate.examples import PAPER_SCENES
 
@@ -38,7 +37,7 @@ def main() -> None:
         start = time.perf_counter()
         edited = sim.edit(scene, edit)
         edit_ms = 1000 * (time.perf_counter() - start)
-        novel = scene.camera.orbit(30.0, scene_centre(scene))
+        novel = scene.camera.orbit(30.0, scene.centre())
         frames = []
         for i in range(clip.num_frames):
             t = i / clip.fps

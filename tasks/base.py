@@ -41,7 +41,7 @@ def describe_object(obj: "SceneObject") -> str:
     noun = obj.category if obj.name.rsplit("_", 1)[-1].isdigit() else obj.name
     if obj.color is None:
         return noun
-    from morphosim_gym.language.colors import color_rgb
+    from morphosim_gym.colors import color_rgb
 
     rgb = np.asarray(obj.color)
     best = min(_BASIC_COLORS, key=lambda c: float(np.sum((np.asarray(color_rgb(c)) - rgb) ** 2)))

@@ -18,7 +18,6 @@ import cv2
 import numpy as np
 
 import morphosim_gym as ms
-from morphosim_gym.edit import scene_centre
 from morphosim_gym.generate.cli import write_video
 
 BUS = "The bus is moving from right to left"
@@ -127,7 +126,7 @@ def render_gallery(out: Path, size: int = 160) -> None:
     write_video(frames, out / "edits.gif", fps=bus.fps / 2)
 
     fish = sim.generate(FISH)
-    centre = scene_centre(fish)
+    centre = fish.centre()
     frames = []
     n = 32
     for i in range(n):

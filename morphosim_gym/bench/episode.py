@@ -67,10 +67,10 @@ def make_sim(suite: Suite, cache_dir: Optional[str]) -> Any:
     disk under `cache_dir` (None = default)."""
     from dataclasses import replace
 
-    import morphosim_gym as ms
     from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
+    from morphosim_gym.pipeline import MorphoSim
 
-    return ms.MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir))
+    return MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir))
 
 
 class EpisodeRunner:
@@ -92,7 +92,7 @@ class EpisodeRunner:
         if self._env is None:
             import gymnasium as gym
 
-            import morphosim_gym  # noqa: F401  (registers the ids)
+            import morphosim_gym.envs  # noqa: F401  (registers the ids)
 
             self._env = gym.make(self.suite.env_id, task=self.suite.task, sim=self.sim, on_edit_error="raise",
                                  disable_env_checker=True, **self.suite.env_kwargs)

@@ -95,9 +95,7 @@ def camera_option(perturbation: Perturbation, scene: Scene4D) -> dict[str, Any]:
         return {}
     out: dict[str, Any] = {}
     if shift.moves:
-        from morphosim_gym.edit import scene_centre
-
-        centre = scene_centre(scene)
+        centre = scene.centre()
         cam = scene.camera.orbit(shift.orbit_deg, centre, shift.pitch_deg)
         out["position"] = (centre + shift.distance_scale * (cam.position - centre)).tolist()
     if shift.fov_y_deg is not None:

@@ -77,14 +77,12 @@ def _group(yaw: float) -> str:
 
 def _views(scene: Any, cfg: QualityConfig) -> list[tuple[float, float, Any]]:
     """(yaw, t, camera) of every image to score."""
-    from morphosim_gym.edit import scene_centre
-
     out = []
     for t in np.linspace(0.0, scene.duration, cfg.times):
         base = scene.camera_at(float(t))
         h = max(8, int(round(cfg.size * base.height / base.width)))
         base = base.resized(cfg.size, h)
-        centre = scene_centre(scene, float(t))
+        centre = scene.centre(float(t))
         for yaw in (0.0,) + tuple(cfg.yaws):
             out.append((yaw, float(t), base if yaw == 0 else base.orbit(yaw, centre)))
     return out
@@ -92,13 +90,15 @@ def _views(scene: Any, cfg: QualityConfig) -> list[tuple[float, float, Any]]:
 
 def score_prompts(prompts: Sequence[str], cfg: QualityConfig, progress: bool = True) -> dict:
     """Generate, render and score every prompt; a JSON-friendly dict with every image's scores."""
-    import morphosim_gym as ms
+    from morphosim_gym.generate.compose import GenerationConfig
     from morphosim_gym.metrics.brisque_score import BrisqueScorer
     from morphosim_gym.metrics.niqe import niqe
+    from morphosim_gym.pipeline import MorphoSim
+    from morphosim_gym.render import render
 
     from .semantic import load_clip, load_qalign
 
-    sim = ms.MorphoSim(reconstruction=cfg.reconstruction, generation=ms.GenerationConfig(detail=cfg.detail))
+    sim = MorphoSim(reconstruction=cfg.reconstruction, generation=GenerationConfig(detail=cfg.detail))
     brisque = BrisqueScorer()
     clip, clip_why = load_clip(cfg.clip_model)
     qalign, qalign_why = load_qalign(cfg.qalign_model, trust_remote_code=cfg.trust_remote_code)
@@ -113,7 +113,7 @@ def score_prompts(prompts: Sequence[str], cfg: QualityConfig, progress: bool = T
         scene = sim.generate(prompt, seed=cfg.seed)
         shots = []
         for yaw, t, cam in _views(scene, cfg):
-            rgb = ms.render(scene, cam, t).rgb_uint8()
+            rgb = render(scene, cam, t).rgb_uint8()
             row: dict[str, Any] = {"prompt": prompt, "group": _group(yaw), "yaw": yaw, "t": round(t, 4),
                                    "brisque": brisque(rgb), "niqe": niqe(rgb)}
             if clip is not None:

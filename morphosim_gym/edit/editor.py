@@ -19,10 +19,11 @@ import numpy as np
 from ..errors import CommandError, EditError
 from ..language import parse
 from ..scene import Provenance, Scene4D
+from ..scene.camera import camera_path
 from . import ops
 from .select import Selection, Selector
 
-__all__ = ["SceneEditor", "scene_centre"]
+__all__ = ["SceneEditor"]
 
 
 class SceneEditor:
@@ -113,25 +114,8 @@ class SceneEditor:
         raise EditError(f"Unsupported edit operation {kind!r}")
 
     def _camera(self, scene: Scene4D, op: Any) -> Scene4D:
-        from ..generate.compose import camera_path
-
         spec = op.camera
         base = scene.cameras[0]
-        centre = scene_centre(scene)
+        centre = scene.centre()
         cams = camera_path(spec, base, centre, scene.num_frames)
         return scene.derive(None, cameras=tuple(cams) if len(set(map(id, cams))) > 1 else (cams[0],))
-
-
-def scene_centre(scene: Scene4D, t: float = 0.0) -> np.ndarray:
-    """Where the generation camera looks: the point on its optical axis nearest the mean of the
-    non-background objects at time t (or at the median depth of everything if there are none)."""
-    cam = scene.camera_at(t)
-    g = scene._at_shared(t)
-    fg = np.isin(g.object_ids, [o.id for o in scene.objects if o.role != "background"])
-    pts = g.means[fg] if fg.any() else g.means
-    if len(pts) == 0:
-        return cam.position + cam.forward
-    depth = float(np.median((pts - cam.position) @ cam.forward)) if not fg.any() else \
-        float((pts.mean(0) - cam.position) @ cam.forward)
-    return cam.position + max(depth, 1e-3) * cam.forward
-

@@ -170,7 +170,7 @@ class Selector:
         # grazing angles, such as a roof, learn features blended with what lies behind them);
         # only Gaussians with some relevance of their own are raised, so neighbours that clearly
         # mean something else (the road under a bus) stay out
-        states = [scene._at_shared(t) for t in times]                      # skinned once, used twice
+        states = [scene.at(t) for t in times]                      # skinned once, used twice
         g = states[len(states) // 2]
         near = neighbourhood_mean(g.means, rel, 3.0 * float(np.median(g.scales.max(axis=1))))
         grown = np.where(rel >= GROW_FLOOR, np.maximum(rel, near), rel)

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from .parts import Part, Texture, euler
+from ..scene.parts import Part, Texture, euler
 
 __all__ = ["CategorySpec", "CATEGORY_SPECS", "build_parts", "category_names"]
 

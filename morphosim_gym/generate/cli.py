@@ -67,8 +67,9 @@ def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
 
 
 def _generate(args: argparse.Namespace) -> int:
-    from .. import GenerationConfig, MorphoSim
+    from ..pipeline import MorphoSim
     from ..scene import save_clip, save_scene
+    from .compose import GenerationConfig
 
     out = Path(args.out)
     sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps),
@@ -100,7 +101,6 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from ..edit import scene_centre
     from ..render import render
     from ..scene import load_scene
 
@@ -108,7 +108,7 @@ def _render(args: argparse.Namespace) -> int:
     n = args.frames or scene.num_frames
     fps = args.fps or scene.fps
     frames = []
-    centre = scene_centre(scene)
+    centre = scene.centre()
     for i in range(n):
         t = scene.duration * i / max(n - 1, 1)
         cam = scene.camera_at(t)
@@ -123,8 +123,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _edit(args: argparse.Namespace) -> int:
-    from .. import MorphoSim
-    from ..edit import scene_centre
+    from ..pipeline import MorphoSim
     from ..render import render
     from ..scene import load_scene, save_scene
 
@@ -134,7 +133,7 @@ def _edit(args: argparse.Namespace) -> int:
     edited = sim.edit(scene, args.text)
     seconds = time.perf_counter() - start
     out = Path(args.out)
-    novel = scene.camera.orbit(args.novel_yaw, scene_centre(scene))
+    novel = scene.camera.orbit(args.novel_yaw, scene.centre())
     frames = []
     for i in range(scene.num_frames):
         t = i / scene.fps

@@ -23,13 +23,15 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
+from ..scene.camera import camera_path
+from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, build_parts
-from .parts import TANGENTIAL_SCALE, SurfaceCloud, match_mean_color, parts_to_gaussians
+from .color_match import match_mean_color
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
-__all__ = ["GenerationConfig", "ComposedScene", "compose_scene", "camera_path"]
+__all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
 
 MAX_INSTANCES = 12
 MIN_RELATIVE_SIZE = 0.3   # no object is smaller than this fraction of the scene's largest one
@@ -126,36 +128,6 @@ def _choose_setting(plan: Any, instances: Sequence[Instance]) -> str:
     if setting == "water" and any(i.mobility == "swim" or i.category == "seaweed" for i in instances):
         return "underwater"
     return setting
-
-
-def camera_path(spec: Any, base: Camera, centre: np.ndarray, num_frames: int) -> list[Camera]:
-    """Per-frame cameras for a `CameraSpec` (fixed, orbit, pan, dolly) starting from `base`, orbiting
-    or dollying about `centre`."""
-    T = num_frames
-    if spec is None or spec.motion == "fixed" or T == 1:
-        return [base] * T
-    tau = np.linspace(0.0, 1.0, T)
-    speed = float(spec.speed)
-    if spec.motion == "orbit":
-        sign = -1.0 if spec.direction == "clockwise" else 1.0
-        total = sign * min(360.0, 120.0 * speed)
-        return [base.orbit(total * s, center=centre) for s in tau]
-    if spec.motion == "pan":
-        sign = -1.0 if spec.direction == "right" else 1.0     # turning right is a negative yaw about +z
-        total = sign * min(60.0, 25.0 * speed)
-        pos = base.position
-        return [base.orbit(total * s, center=pos) for s in tau]
-    # dolly: move along the view axis, in (default) or out
-    sign = -1.0 if spec.direction == "out" else 1.0
-    dist = float(np.linalg.norm(base.position - centre))
-    travel = sign * min(0.6, 0.3 * speed) * dist
-    out = []
-    for s in tau:
-        c2w = base.camera_to_world.copy()
-        c2w[:3, 3] += base.forward * travel * s
-        w2c = np.linalg.inv(c2w)
-        out.append(base.with_pose(w2c))
-    return out
 
 
 def _rescale(inst: Instance, factor: float) -> None:

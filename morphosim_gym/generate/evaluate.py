@@ -191,7 +191,8 @@ def evaluate(texts: Sequence[str], sim: Any, seed: int = 0) -> dict:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command-line entry: evaluate a corpus and print a table (and JSON with --json)."""
-    from .. import GenerationConfig, MorphoSim
+    from ..pipeline import MorphoSim
+    from .compose import GenerationConfig
 
     ap = argparse.ArgumentParser(prog="python -m morphosim_gym.generate.evaluate", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -90,7 +90,7 @@ def track_points(scene: Scene4D, cameras, depth: np.ndarray, masks: np.ndarray, 
     tracks = np.zeros((len(idx), T, 2), np.float32)
     visible = np.zeros((len(idx), T), bool)
     for i in range(T):
-        pts = scene._at_shared(i / scene.fps).means[idx]
+        pts = scene.at(i / scene.fps).means[idx]
         uv, z = cameras[i].project(pts)
         tracks[:, i] = uv
         col = np.floor(uv[:, 0]).astype(np.int64)

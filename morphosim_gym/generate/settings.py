@@ -17,7 +17,9 @@ import numpy as np
 from typing import Sequence
 
 from ..scene import Camera
-from .parts import AMBIENT, DIFFUSE, LIGHT_DIR, SurfaceCloud, _normal_quats
+from ..scene.lighting import AMBIENT, DIFFUSE, LIGHT_DIR
+from ..scene.parts import SurfaceCloud
+from ..scene.rotations import normal_quats
 
 __all__ = ["Setting", "SETTING_NAMES", "build_setting", "setting_levels", "carve_under"]
 
@@ -107,7 +109,7 @@ def _flat(pts: np.ndarray, spacing: np.ndarray, colors: np.ndarray, rng: np.rand
         colors = colors * (AMBIENT + DIFFUSE * max(float(np.dot(normal, LIGHT_DIR)), 0.0))
     tang = 0.85 * spacing
     scales = np.c_[tang * rng.uniform(0.85, 1.15, n), tang * rng.uniform(0.85, 1.15, n), tang * thickness]
-    return SurfaceCloud(pts, _normal_quats(nrm, rng), scales, np.full(n, opacity), np.clip(colors, 0, 1),
+    return SurfaceCloud(pts, normal_quats(nrm, rng), scales, np.full(n, opacity), np.clip(colors, 0, 1),
                         np.zeros(n, dtype=np.int64), ["setting"])
 
 

@@ -5,10 +5,11 @@
     >>> plan.mode, plan.objects[0].category, plan.motions[0].direction_world
     ('generate', 'ball', (-1.0, 0.0, 0.0))
 
-Modules: `plan` (types, validation, JSON), `vocabulary` (categories and settings), `colors`,
+Modules: `plan` (types, validation, JSON), `vocabulary` (categories and settings),
 `lexicon` (word tables), `rules` (the offline parser), `grounding` (nouns -> categories, targets ->
 scene objects), `embeddings` (MiniLM text embeddings, shared with later layers), `llm` (optional
-OpenAI-compatible backend), `evaluate` / `bench` (corpus accuracy and timing), `cli`.
+OpenAI-compatible backend), `evaluate` / `bench` (corpus accuracy and timing), `cli`. Colour names
+live below every layer, in `morphosim_gym.colors`.
 """
 
 from .api import parse

@@ -24,7 +24,7 @@ import threading
 from pathlib import Path
 from typing import Iterable
 
-from .colors import CSS_COLORS, EXTRA_COLORS, COLOR_MODIFIERS, MODIFIER_SYNONYMS
+from ..colors import CSS_COLORS, EXTRA_COLORS, COLOR_MODIFIERS, MODIFIER_SYNONYMS
 from .vocabulary import CATEGORIES, SETTING_WORDS, _NOUNS
 
 __all__ = ["SPEED_PHRASES", "SPEED_VERBS", "SIZE_WORDS", "NUMBER_WORDS", "DIRECTIONS", "VERBS", "verb_info",

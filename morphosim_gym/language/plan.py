@@ -41,8 +41,8 @@ import math
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping, Sequence
 
+from ..colors import color_rgb
 from ..errors import CommandError
-from .colors import color_rgb
 from .vocabulary import CATEGORIES, SETTINGS
 
 __all__ = ["MODES", "PATHS", "CAMERA_MOTIONS", "CAMERA_DIRECTIONS", "EDIT_OPS", "RECOLOR_MODES", "MAX_COUNT",

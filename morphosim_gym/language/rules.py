@@ -40,8 +40,8 @@ import re
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
+from ..colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
 from ..errors import CommandError
-from .colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
 from .grounding import (ALL_WORDS, CAMERA_WORDS, SceneItem, ground_noun, ground_noun_vocabulary,
                         resolve_in_scene, scene_items)
 from .lexicon import (AUX, CLOCKWISE_WORDS, COLLECTIVE_NOUNS, DIRECTION_WORDS, DIRECTIONS, FAR_WORDS, NUMBER_WORDS,

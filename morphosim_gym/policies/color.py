@@ -14,7 +14,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from morphosim_gym.language.colors import color_rgb, is_color_word
+from morphosim_gym.colors import color_rgb, is_color_word
 from morphosim_gym.metrics import rgb_to_lab
 
 from .task import task_kind

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import GeneratedClip
+from ..scene.rotations import normal_quats
 from .lifting import PointSet, backproject, instance_motion, interior_mask, static_residual, voxel_downsample
 from .model import DynamicGaussians
 
@@ -77,12 +78,6 @@ def _kmeans(points: np.ndarray, k: int, rng: np.random.Generator, iters: int = 2
             if sel.any():
                 centres[j] = points[sel].mean(0)
     return centres
-
-
-def _disc_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    from ..generate.parts import _normal_quats
-
-    return _normal_quats(normals, rng)
 
 
 def _covered(clip: GeneratedClip, frame: int, points: np.ndarray, tolerance: float = 0.05) -> np.ndarray:
@@ -199,7 +194,7 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
         raise ValueError("Expected pixels to lift into Gaussians, found none (empty masks or depth)")
     fp = np.maximum(pts.footprint, 1e-5)
     scales = np.c_[fp, fp, fp * cfg.flatness] * 0.9
-    quats = _disc_quats(pts.normals, rng)
+    quats = normal_quats(pts.normals, rng)
     K = len(node_centres)
     rot_arr = np.stack(node_rot, axis=1) if K else np.zeros((T, 0, 3, 3))
     trans_arr = np.stack(node_trans, axis=1) if K else np.zeros((T, 0, 3))

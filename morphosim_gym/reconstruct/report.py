@@ -62,9 +62,7 @@ def quality_report(clip: GeneratedClip, scene: Scene4D, frame_stride: int = 4, s
     }
     gt = clip.ground_truth
     if gt is not None:
-        from ..edit import scene_centre
-
-        centre = scene_centre(gt)
+        centre = gt.centre()
         novel = {}
         for yaw in NOVEL_YAWS:
             ps, ss = [], []

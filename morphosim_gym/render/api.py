@@ -87,7 +87,7 @@ def render(
     gaussians = []
     for p in parts:
         if isinstance(p, Scene4D):
-            gaussians.append(p._at_shared(t))
+            gaussians.append(p.at(t))
         elif isinstance(p, Gaussians):
             gaussians.append(p)
         else:

@@ -1,9 +1,9 @@
 """An agent's MuJoCo geoms as Gaussians, so that cameras render the agent with the scene.
 
 `AgentSkin` samples flat surface Gaussians over each visual geom of a model once (in the
-geom's own frame, at the model's nominal size, with the generator's part sampler), then
+geom's own frame, at the model's nominal size, with the scene's part sampler), then
 poses them every step from MuJoCo's `geom_xpos` / `geom_xmat` and shades them with the
-generator's fixed sun so they match the scene's baked lighting.
+scene's fixed sun (`scene.lighting`) so they match the scene's baked lighting.
 
 Supported geom types: sphere, capsule, ellipsoid, cylinder, box. Planes, meshes and
 height fields are skipped (a rig's MJCF uses primitives only).
@@ -16,8 +16,9 @@ from typing import Any
 import numba
 import numpy as np
 
-from ..generate.parts import AMBIENT, DIFFUSE, LIGHT_DIR, Part, parts_to_gaussians
 from ..scene.gaussians import Gaussians
+from ..scene.lighting import AMBIENT, DIFFUSE, LIGHT_DIR
+from ..scene.parts import Part, parts_to_gaussians
 from ..scene.rotations import quat_to_matrix
 
 __all__ = ["AgentSkin", "geom_part"]

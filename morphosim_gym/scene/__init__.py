@@ -1,4 +1,9 @@
-"""World state: Gaussians, cameras, motion, 4D scenes, clips and their files."""
+"""World state: Gaussians, cameras, motion, 4D scenes, clips and their files.
+
+Also the geometry every higher layer shares (the lowest layer that needs it owns it): `camera`
+(`Camera`, `camera_path`), `rotations` (quaternions, `normal_quats`), `primitives` and `parts`
+(shapes sampled as surface Gaussians), `lighting` (the fixed sun baked into colours).
+"""
 
 from .camera import Camera
 from .clip import GeneratedClip

@@ -12,7 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["Camera", "MUJOCO_TO_OPENCV"]
+__all__ = ["Camera", "MUJOCO_TO_OPENCV", "camera_path", "CAMERA_PATHS"]
 
 # Columns of a MuJoCo camera's frame expressed in the OpenCV camera frame: flip y and z.
 MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])
@@ -265,6 +265,49 @@ class Camera:
     def __repr__(self) -> str:
         pos = np.round(self.position, 3).tolist()
         return f"Camera({self.width}x{self.height}, fov_y={self.fov_y_deg:.1f}deg, position={pos})"
+
+
+def _orbit_path(spec: Any, base: Camera, centre: np.ndarray, tau: np.ndarray) -> list[Camera]:
+    sign = -1.0 if spec.direction == "clockwise" else 1.0
+    total = sign * min(360.0, 120.0 * float(spec.speed))
+    return [base.orbit(total * s, center=centre) for s in tau]
+
+
+def _pan_path(spec: Any, base: Camera, centre: np.ndarray, tau: np.ndarray) -> list[Camera]:
+    sign = -1.0 if spec.direction == "right" else 1.0     # turning right is a negative yaw about +z
+    total = sign * min(60.0, 25.0 * float(spec.speed))
+    pos = base.position
+    return [base.orbit(total * s, center=pos) for s in tau]
+
+
+def _dolly_path(spec: Any, base: Camera, centre: np.ndarray, tau: np.ndarray) -> list[Camera]:
+    """Along the view axis, in (default) or out."""
+    sign = -1.0 if spec.direction == "out" else 1.0
+    dist = float(np.linalg.norm(base.position - centre))
+    travel = sign * min(0.6, 0.3 * float(spec.speed)) * dist
+    out = []
+    for s in tau:
+        c2w = base.camera_to_world.copy()
+        c2w[:3, 3] += base.forward * travel * s
+        w2c = np.linalg.inv(c2w)
+        out.append(base.with_pose(w2c))
+    return out
+
+
+# camera motion name -> (spec, base camera, centre, tau [T] in [0, 1]) -> per-frame cameras
+CAMERA_PATHS = {"orbit": _orbit_path, "pan": _pan_path, "dolly": _dolly_path}
+
+
+def camera_path(spec: Any, base: Camera, centre: np.ndarray, num_frames: int) -> list[Camera]:
+    """Per-frame cameras for a camera spec (`.motion` fixed, orbit, pan or dolly, `.direction`,
+    `.speed`; e.g. `language.CameraSpec`) starting from `base`, orbiting or dollying about `centre`.
+    `spec` None is a fixed camera."""
+    if spec is None or spec.motion == "fixed" or num_frames == 1:
+        return [base] * num_frames
+    path = CAMERA_PATHS.get(spec.motion)
+    if path is None:
+        raise ValueError(f"Expected a camera motion in {['fixed', *CAMERA_PATHS]}, found {spec.motion!r}")
+    return path(spec, base, centre, np.linspace(0.0, 1.0, num_frames))
 
 
 def _invert_rigid(m: np.ndarray) -> np.ndarray:

@@ -6,6 +6,8 @@ broadcast over any leading axes.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = [
@@ -17,6 +19,7 @@ __all__ = [
     "quat_slerp",
     "axis_angle_to_quat",
     "quat_rotate",
+    "normal_quats",
 ]
 
 
@@ -132,3 +135,18 @@ def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Rotate vectors v [..., 3] by quaternions q [..., 4]."""
     r = quat_to_matrix(q)
     return np.einsum("...ij,...j->...i", r, np.asarray(v))
+
+
+def normal_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """[n, 4] quaternions whose local z is the normal [n, 3], with a random twist about it
+    (the orientation of a flat surface Gaussian)."""
+    n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    helper = np.where(np.abs(n[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    t1 = np.cross(helper, n)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(n, t1)
+    twist = rng.uniform(0, 2 * math.pi, len(n))[:, None]
+    a = np.cos(twist) * t1 + np.sin(twist) * t2
+    b = np.cross(n, a)
+    mats = np.stack([a, b, n], axis=-1)          # columns: local x, y, z in the object frame
+    return matrix_to_quat(mats)

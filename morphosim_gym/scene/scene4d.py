@@ -5,6 +5,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -15,7 +17,9 @@ from .features import FeatureDecoder
 from .gaussians import Gaussians
 from .motion import Motion
 
-__all__ = ["SceneObject", "Provenance", "Scene4D"]
+__all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE"]
+
+POSE_CACHE_SIZE = 4     # posed Gaussians kept per scene (by time), least recently used dropped first
 
 
 @dataclass(frozen=True)
@@ -91,7 +95,8 @@ class Scene4D:
         parent: the scene this one was edited from (for `undo`), if any.
 
     Examples:
-        >>> scene.at(1.0)            # world Gaussians 1 s into the clip  # doctest: +SKIP
+        >>> scene.at(1.0)            # world Gaussians 1 s into the clip (read-only)  # doctest: +SKIP
+        >>> scene.centre()           # [3] what the generation camera looks at  # doctest: +SKIP
     """
 
     gaussians: Gaussians
@@ -146,9 +151,19 @@ class Scene4D:
         _freeze(self.gaussians)
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
-        self._cache_t: float | None = None
-        self._cache_g: Gaussians | None = None
+        self._poses: OrderedDict[float, Gaussians] = OrderedDict()   # frame index -> posed Gaussians (LRU)
+        self._poses_lock = threading.Lock()
         self._hash: str | None = None
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_poses_lock")
+        state["_poses"] = OrderedDict()          # a cache, rebuilt on demand
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._poses_lock = threading.Lock()
 
     # -------------------------------------------------------------- time
     @property
@@ -177,27 +192,44 @@ class Scene4D:
         return min(max(tf, 0.0), self.duration) * self.fps
 
     def at(self, t: float = 0.0) -> Gaussians:
-        """World Gaussians at time `t` seconds, node poses interpolated between frames
-        (slerp for rotations). The result is a fresh array set owned by the caller."""
-        c = self._at_shared(t)
-        return Gaussians._trusted(means=c.means.copy(), quats=c.quats.copy(), scales=c.scales.copy(),
-                                  opacities=c.opacities.copy(), colors=c.colors.copy(),
-                                  features=None if c.features is None else c.features.copy(),
-                                  object_ids=c.object_ids.copy())
+        """World Gaussians at time `t` seconds, node poses interpolated between frames (slerp for
+        rotations).
 
-    def _at_shared(self, t: float) -> Gaussians:
-        """Like `at`, but returns cached arrays that callers must not modify (the render hot path)."""
+        The arrays are read-only (`flags.writeable` False) and shared: the last `POSE_CACHE_SIZE`
+        times asked are kept, so callers may interleave times freely at no extra skinning cost.
+        Use `.numpy()` on the result for a copy of one's own to modify.
+        """
         frame = self.frame_index(t)
-        if self._cache_t != frame or self._cache_g is None:
-            g = self.gaussians
-            means, quats = self.motion.apply(g.means, g.quats, frame)
-            means.setflags(write=False)
-            quats.setflags(write=False)
-            self._cache_g = Gaussians._trusted(means=means, quats=quats, scales=g.scales,
-                                               opacities=g.opacities, colors=g.colors,
-                                               features=g.features, object_ids=g.object_ids)
-            self._cache_t = frame
-        return self._cache_g
+        with self._poses_lock:
+            g = self._poses.get(frame)
+            if g is not None:
+                self._poses.move_to_end(frame)
+                return g
+        c = self.gaussians
+        means, quats = self.motion.apply(c.means, c.quats, frame)
+        means.setflags(write=False)
+        quats.setflags(write=False)
+        g = Gaussians._trusted(means=means, quats=quats, scales=c.scales, opacities=c.opacities, colors=c.colors,
+                               features=c.features, object_ids=c.object_ids)
+        with self._poses_lock:
+            self._poses[frame] = g
+            while len(self._poses) > POSE_CACHE_SIZE:
+                self._poses.popitem(last=False)
+        return g
+
+    def centre(self, t: float = 0.0) -> np.ndarray:
+        """[3] the scene centre at time t: where the generation camera looks, the point on its
+        optical axis nearest the mean of the non-background objects' Gaussians (or at the median
+        depth of all Gaussians if there are none). Orbits, novel views and camera edits turn about it."""
+        cam = self.camera_at(t)
+        g = self.at(t)
+        fg = np.isin(g.object_ids, [o.id for o in self.objects if o.role != "background"])
+        pts = g.means[fg] if fg.any() else g.means
+        if len(pts) == 0:
+            return cam.position + cam.forward
+        depth = float(np.median((pts - cam.position) @ cam.forward)) if not fg.any() else \
+            float((pts.mean(0) - cam.position) @ cam.forward)
+        return cam.position + max(depth, 1e-3) * cam.forward
 
     # ------------------------------------------------------------- cameras
     @property
@@ -233,7 +265,7 @@ class Scene4D:
     def object_center(self, key: int | str, t: float = 0.0) -> np.ndarray:
         """[3] mean position of an object's Gaussians at time t."""
         obj = self.object(key)
-        g = self._at_shared(t)
+        g = self.at(t)
         sel = g.object_ids == obj.id
         if not np.any(sel):
             raise ValueError(f"Expected Gaussians for object {obj.name!r}, found none")

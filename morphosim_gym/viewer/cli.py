@@ -42,7 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _view(args: argparse.Namespace) -> int:
-    from .. import GenerationConfig, MorphoSim
+    from ..generate.compose import GenerationConfig
+    from ..pipeline import MorphoSim
 
     if args.env is None and args.source is None:
         raise ValueError("Expected a scene file, a directory or a prompt to view (or --env ID), found none")

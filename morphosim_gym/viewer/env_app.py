@@ -86,7 +86,7 @@ class EnvRunner:
                  env_kwargs: Optional[dict] = None) -> None:
         import gymnasium as gym
 
-        import morphosim_gym  # noqa: F401  (registers the MorphoSim envs)
+        import morphosim_gym.envs  # noqa: F401  (registers the MorphoSim envs)
 
         self.factory = resolve_policy(policy)       # before making the env: a bad spec fails at once
         if isinstance(env, str):
@@ -202,9 +202,7 @@ class EnvRunner:
     def orbit_centre(self) -> np.ndarray:
         """[3] what the third-person camera orbits: the scene centre."""
         if self.has_world:
-            from ..edit import scene_centre
-
-            return scene_centre(self.env.unwrapped.world.scene)
+            return self.env.unwrapped.world.scene.centre()
         return np.array([0.0, 0.0, 0.5])
 
     def agent_cameras(self) -> dict[str, Camera]:

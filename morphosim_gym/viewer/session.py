@@ -352,9 +352,7 @@ class ViewerSession:
 
     def orbit_centre(self) -> np.ndarray:
         """[3] where the generation camera looks (a good point to orbit about)."""
-        from ..edit import scene_centre
-
-        return scene_centre(self._scene)
+        return self._scene.centre()
 
     # --------------------------------------------------------------- rendering
     def render(self, camera: Camera, snapshot: Optional[Snapshot] = None) -> np.ndarray:

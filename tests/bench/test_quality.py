@@ -9,7 +9,6 @@ import pytest
 
 import morphosim_gym as ms
 from morphosim_gym.cli import main
-from morphosim_gym.edit import scene_centre
 from morphosim_gym.metrics.brisque_score import brisque
 from morphosim_gym.metrics.niqe import niqe, pristine_model
 
@@ -27,7 +26,7 @@ def fish_views():
     """The paper's first scene at full detail, from the generation view and a 30-degree novel view."""
     scene = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=4.0)).generate(FISH, seed=0)
     cam = scene.camera.resized(384, 384)
-    return [ms.render(scene, c, 1.0).rgb_uint8() for c in (cam, cam.orbit(30.0, scene_centre(scene)))]
+    return [ms.render(scene, c, 1.0).rgb_uint8() for c in (cam, cam.orbit(30.0, scene.centre()))]
 
 
 @pytest.mark.parametrize("metric", [brisque, niqe], ids=["brisque", "niqe"])

@@ -22,7 +22,7 @@ def bus(sim):
 
 def _views(scene):
     cam = scene.camera
-    centre = ms.edit.scene_centre(scene)
+    centre = scene.centre()
     return [cam, cam.orbit(20.0, centre), cam.orbit(-30.0, centre)]
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import morphosim_gym as ms
+from morphosim_gym.colors import color_rgb
 from morphosim_gym.envs import register_task
 from morphosim_gym.tasks import (TASK_CLASSES, FindTask, ReachTask, TaskSpec, TrackTask, builtin_task_names,
                                  load_task_spec, make_task, tolerance)
@@ -109,7 +110,7 @@ def test_scene_distribution_prompts_generate_with_their_target(name):
         if name != "find":
             assert target.dynamic
         color = req.fields.get("color")
-        assert target.color == pytest.approx(ms.language.colors.color_rgb(color), abs=1e-3)
+        assert target.color == pytest.approx(color_rgb(color), abs=1e-3)
 
 
 @pytest.mark.slow

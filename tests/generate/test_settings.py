@@ -3,15 +3,16 @@
 import numpy as np
 
 import morphosim_gym as ms
-from morphosim_gym.generate.parts import SurfaceCloud, _normal_quats
 from morphosim_gym.generate.settings import carve_under
+from morphosim_gym.scene.parts import SurfaceCloud
+from morphosim_gym.scene.rotations import normal_quats
 
 
 def _ground(sigma: float = 0.03, half: float = 0.5) -> SurfaceCloud:
     g = np.arange(-half, half + 1e-9, sigma * 1.2)
     xy = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
     n = len(xy)
-    return SurfaceCloud(np.c_[xy, np.zeros(n)], _normal_quats(np.tile([0.0, 0.0, 1.0], (n, 1)), np.random.default_rng(0)),
+    return SurfaceCloud(np.c_[xy, np.zeros(n)], normal_quats(np.tile([0.0, 0.0, 1.0], (n, 1)), np.random.default_rng(0)),
                         np.tile([sigma, sigma, 0.3 * sigma], (n, 1)), np.full(n, 0.98),
                         np.tile([0.6, 0.4, 0.2], (n, 1)), np.zeros(n, np.int64), ["setting"])
 
@@ -57,7 +58,7 @@ def test_the_table_never_shows_through_the_plate():
     plate = next(o.id for o in clip.ground_truth.objects if o.name == "plate")
     holes, area = 0, 0
     for i in range(clip.num_frames):
-        state = clip.ground_truth._at_shared(i / clip.fps)
+        state = clip.ground_truth.at(i / clip.fps)
         alone = ms.render(state.subset(state.object_ids == plate), clip.cameras[i])
         solid = alone.alpha > 0.999
         solid[1:-1, 1:-1] &= solid[:-2, 1:-1] & solid[2:, 1:-1] & solid[1:-1, :-2] & solid[1:-1, 2:]

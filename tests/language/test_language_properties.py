@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import morphosim_gym as ms
-from morphosim_gym.language.colors import CSS_COLORS
+from morphosim_gym.colors import CSS_COLORS
 from morphosim_gym.language.lexicon import DIRECTION_WORDS, SIZE_WORDS, VERBS
 from morphosim_gym.language.plan import Plan
 from morphosim_gym.language.rules import EDIT_VERBS

@@ -3,7 +3,7 @@
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.language.colors import CSS_COLORS, apply_modifier, color_rgb
+from morphosim_gym.colors import CSS_COLORS, apply_modifier, color_rgb
 from morphosim_gym.language.lexicon import SPEED_PHRASES
 from morphosim_gym.language.vocabulary import CATEGORIES
 

@@ -141,7 +141,7 @@ def test_unknown_camera_name_lists_the_cameras():
 @pytest.mark.parametrize("geom_type,size", [(2, [0.1, 0, 0]), (3, [0.05, 0.2, 0]), (4, [0.1, 0.2, 0.3]),
                                             (5, [0.05, 0.1, 0]), (6, [0.1, 0.2, 0.3])])
 def test_geom_parts_stay_inside_the_geom(geom_type, size):
-    from morphosim_gym.generate.parts import parts_to_gaussians
+    from morphosim_gym.scene.parts import parts_to_gaussians
 
     part = geom_part(geom_type, np.array(size))
     cloud = parts_to_gaussians([part], 400, (0.5, 0.5, 0.5), np.random.default_rng(0), shade=False)
@@ -194,7 +194,7 @@ def test_third_person_camera_sees_the_arm():
 
 
 def test_skin_kernel_matches_a_numpy_reference():
-    from morphosim_gym.generate.parts import AMBIENT, DIFFUSE, LIGHT_DIR
+    from morphosim_gym.scene.lighting import AMBIENT, DIFFUSE, LIGHT_DIR
     from morphosim_gym.scene.rotations import matrix_to_quat, quat_multiply
 
     arm = ArmRig()

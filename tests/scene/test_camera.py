@@ -132,3 +132,24 @@ def test_orbit_keeps_distance_to_centre():
 def test_dict_roundtrip_exact():
     cam = Camera.look_at((0.1, -4.3, 2.2), (0, 0.2, 0.5), 84, 84, 61.3)
     assert Camera.from_dict(cam.to_dict()) == cam
+
+
+def test_camera_path_fixed_orbit_pan_dolly():
+    from types import SimpleNamespace
+
+    from morphosim_gym.scene.camera import camera_path
+
+    base = Camera.look_at((0, -4, 2), (0, 0, 0.5), 32, 32, 60)
+    centre = np.array([0.0, 0.0, 0.5])
+    assert camera_path(None, base, centre, 5) == [base] * 5
+    orbit = camera_path(SimpleNamespace(motion="orbit", direction="clockwise", speed=1.0), base, centre, 5)
+    assert len(orbit) == 5
+    np.testing.assert_allclose(orbit[0].position, base.position, atol=1e-12)
+    np.testing.assert_allclose([np.linalg.norm(c.position - centre) for c in orbit],
+                               np.linalg.norm(base.position - centre))
+    pan = camera_path(SimpleNamespace(motion="pan", direction="left", speed=1.0), base, centre, 3)
+    np.testing.assert_allclose([c.position for c in pan], [base.position] * 3, atol=1e-12)
+    dolly = camera_path(SimpleNamespace(motion="dolly", direction="in", speed=1.0), base, centre, 3)
+    assert np.linalg.norm(dolly[-1].position - centre) < np.linalg.norm(base.position - centre)
+    with pytest.raises(ValueError, match="camera motion"):
+        camera_path(SimpleNamespace(motion="spin", direction=None, speed=1.0), base, centre, 3)

@@ -87,12 +87,38 @@ def test_scene_at_rejects_time_outside_clip(tiny_scene, t):
         tiny_scene.at(t)
 
 
-def test_scene_is_immutable_and_at_returns_owned_arrays(tiny_scene):
+def test_scene_is_immutable_and_at_returns_read_only_arrays(tiny_scene):
     with pytest.raises(ValueError):
         tiny_scene.gaussians.colors[0, 0] = 1.0
     g = tiny_scene.at(0.0)
-    g.means[:] = 0.0                               # caller owns the result
+    for name in ("means", "quats", "scales", "opacities", "colors", "object_ids"):
+        with pytest.raises(ValueError):            # shared with the cache: a caller cannot corrupt it
+            getattr(g, name)[:] = 0
+    own = g.numpy()
+    own.means[:] = 0.0                             # a copy is the caller's own
     assert not np.allclose(tiny_scene.at(0.0).means, 0.0)
+
+
+def test_at_caches_recent_times_and_interleaves(tiny_scene):
+    from morphosim_gym.scene.scene4d import POSE_CACHE_SIZE
+
+    times = [i / tiny_scene.fps for i in range(min(tiny_scene.num_frames, POSE_CACHE_SIZE))]
+    first = [tiny_scene.at(t) for t in times]
+    again = [tiny_scene.at(t) for t in reversed(times)][::-1]
+    assert all(a is b for a, b in zip(first, again))          # interleaved times hit the cache
+    fresh = Scene4D(tiny_scene.gaussians, tiny_scene.motion, tiny_scene.objects, tiny_scene.fps, tiny_scene.cameras)
+    for t, g in zip(times, first):
+        np.testing.assert_array_equal(g.means, fresh.at(t).means)
+        np.testing.assert_array_equal(g.quats, fresh.at(t).quats)
+    tiny_scene.at(0.5 / tiny_scene.fps)                       # a new time evicts the least recently used
+    assert len(tiny_scene._poses) <= POSE_CACHE_SIZE
+
+
+def test_centre_is_on_the_generation_cameras_axis(tiny_scene):
+    c = tiny_scene.centre(0.0)
+    cam = tiny_scene.camera
+    off_axis = (c - cam.position) - ((c - cam.position) @ cam.forward) * cam.forward
+    assert np.linalg.norm(off_axis) < 1e-9 and (c - cam.position) @ cam.forward > 0
 
 
 def test_derive_and_undo_bit_exact(tiny_scene):
@@ -140,3 +166,12 @@ def test_single_frame_scene_has_zero_duration():
     s = make_tiny_scene(frames=1)
     assert s.duration == 0.0 and len(s.at(0.0)) == len(s.gaussians)
     assert isinstance(s, Scene4D)
+
+
+def test_scene_pickles_without_its_pose_cache(tiny_scene):
+    import pickle
+
+    tiny_scene.at(0.0)
+    back = pickle.loads(pickle.dumps(tiny_scene))
+    assert back.content_hash() == tiny_scene.content_hash() and len(back._poses) == 0
+    np.testing.assert_array_equal(back.at(1.0 / tiny_scene.fps).means, tiny_scene.at(1.0 / tiny_scene.fps).means)

@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["Surface", "SHAPES", "sample_shape", "shape_area"]
+__all__ = ["Surface", "SHAPES", "sample_shape", "shape_area", "split_counts"]
 
 
 @dataclass
@@ -59,7 +59,7 @@ def box(n: int, rng: np.random.Generator, size=(1.0, 1.0, 1.0), faces: str = "xX
     dims = np.array(size, dtype=np.float64)
     chosen = [table[f] for f in faces]
     areas = np.array([dims[(ax + 1) % 3] * dims[(ax + 2) % 3] for ax, _ in chosen])
-    counts = _split(n, areas)
+    counts = split_counts(n, areas)
     pts, nrm, uvs = [], [], []
     for (ax, sign), k in zip(chosen, counts):
         if k == 0:
@@ -85,7 +85,7 @@ def cylinder(n: int, rng: np.random.Generator, radius: float = 1.0, height: floa
     slant = math.hypot(height, r0 - r1)
     side = math.pi * (r0 + r1) * slant
     areas = [side, math.pi * r1 * r1 if "t" in caps else 0.0, math.pi * r0 * r0 if "b" in caps else 0.0]
-    k_side, k_top, k_bot = _split(n, np.array(areas))
+    k_side, k_top, k_bot = split_counts(n, np.array(areas))
     u = _stratified(k_side, rng)
     phi = 2 * math.pi * u[:, 0]
     # area-uniform along a cone's slant: radius varies linearly, density ~ radius
@@ -146,7 +146,7 @@ def capsule(n: int, rng: np.random.Generator, radius: float = 0.5, length: float
     """Capsule along x: a cylinder of `length` between two hemispheres (total length + 2 radius)."""
     side = 2 * math.pi * radius * length
     cap = 2 * math.pi * radius * radius
-    k_side, k_a, k_b = _split(n, np.array([side, cap, cap]))
+    k_side, k_a, k_b = split_counts(n, np.array([side, cap, cap]))
     c = cylinder(k_side, rng, radius, length, caps="")
     pts = [c.points[:, [2, 0, 1]] - [length / 2, 0, 0]]
     nrm = [c.normals[:, [2, 0, 1]]]
@@ -161,7 +161,7 @@ def capsule(n: int, rng: np.random.Generator, radius: float = 0.5, length: float
     return Surface(np.concatenate(pts), np.concatenate(nrm), np.concatenate(uvs))
 
 
-def _split(n: int, weights: np.ndarray) -> list[int]:
+def split_counts(n: int, weights: np.ndarray) -> list[int]:
     """Split n into integer counts proportional to weights (largest remainders)."""
     w = np.asarray(weights, dtype=np.float64)
     if w.sum() <= 0:

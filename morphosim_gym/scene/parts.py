@@ -3,7 +3,8 @@
 A `Part` is a primitive (see `primitives.py`) placed in the object's frame (x forward,
 y left, z up, resting on z = 0) with a colour rule and an optional procedural texture.
 `parts_to_gaussians` shares a Gaussian budget between parts by area, lays flat
-Gaussians (discs) on the surfaces, and bakes a soft light into their colours.
+Gaussians (discs) on the surfaces, and bakes a soft light into their colours. The generator's
+object library and the rig's agent skins both build on it.
 """
 
 from __future__ import annotations
@@ -14,21 +15,18 @@ from typing import Sequence, Union
 
 import numpy as np
 
-from ..scene.rotations import matrix_to_quat
-from .primitives import _split, sample_shape, shape_area
+from .lighting import AMBIENT, DIFFUSE, LIGHT_DIR
+from .primitives import sample_shape, shape_area, split_counts
+from .rotations import normal_quats
 
-__all__ = ["Part", "Texture", "ColorRule", "parts_to_gaussians", "euler", "SurfaceCloud", "LIGHT_DIR",
-           "TANGENTIAL_SCALE", "match_mean_color"]
+__all__ = ["Part", "Texture", "ColorRule", "parts_to_gaussians", "euler", "resolve_color", "SurfaceCloud",
+           "TANGENTIAL_SCALE"]
 
 TANGENTIAL_SCALE = 0.62   # in-surface scale of an object's Gaussians, as a fraction of their spacing
 
 # A colour rule: "primary" (the object's colour), ("primary", k) (primary scaled by k and
 # clipped), ("mix", rgb, w) (primary blended towards rgb by w), or a fixed RGB triple.
 ColorRule = Union[str, tuple]
-
-LIGHT_DIR = np.array([0.35, -0.45, 0.82]) / np.linalg.norm([0.35, -0.45, 0.82])
-AMBIENT = 0.74
-DIFFUSE = 0.34
 
 
 @dataclass
@@ -127,20 +125,6 @@ class SurfaceCloud:
                             self.colors[keep], self.nodes[keep], self.node_names)
 
 
-def _normal_quats(normals: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Quaternions whose local z is the normal, with a random twist about it."""
-    n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    helper = np.where(np.abs(n[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
-    t1 = np.cross(helper, n)
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(n, t1)
-    twist = rng.uniform(0, 2 * math.pi, len(n))[:, None]
-    a = np.cos(twist) * t1 + np.sin(twist) * t2
-    b = np.cross(n, a)
-    mats = np.stack([a, b, n], axis=-1)          # columns: local x, y, z in the object frame
-    return matrix_to_quat(mats)
-
-
 def _pattern(tex: Texture, local: np.ndarray, uv: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """(brightness multiplier [n], second-colour weight [n]) of a texture at points."""
     n = len(local)
@@ -188,7 +172,7 @@ def parts_to_gaussians(parts: Sequence[Part], budget: int, primary: Sequence[flo
         raise ValueError(f"Expected a Gaussian budget of at least one per part ({len(parts)}), found {budget}")
     primary = np.asarray(primary, dtype=np.float64)
     weights = np.array([max(p.area(), 1e-9) * p.density for p in parts])
-    counts = [max(8, c) for c in _split(budget, weights)]
+    counts = [max(8, c) for c in split_counts(budget, weights)]
     node_names: list[str] = []
     out = {k: [] for k in ("means", "quats", "scales", "opacities", "colors", "nodes")}
     for part, count in zip(parts, counts):
@@ -215,33 +199,10 @@ def parts_to_gaussians(parts: Sequence[Part], budget: int, primary: Sequence[flo
         if part.node not in node_names:
             node_names.append(part.node)
         out["means"].append(pts)
-        out["quats"].append(_normal_quats(nrm, rng))
+        out["quats"].append(normal_quats(nrm, rng))
         out["scales"].append(scales)
         out["opacities"].append(np.full(count, part.opacity))
         out["colors"].append(col)
         out["nodes"].append(np.full(count, node_names.index(part.node)))
     return SurfaceCloud(*(np.concatenate(out[k]) for k in ("means", "quats", "scales", "opacities", "colors",
                                                              "nodes")), node_names=node_names)
-
-
-def match_mean_color(colors: np.ndarray, weights: np.ndarray, target: Sequence[float], iterations: int = 6,
-                     tolerance: float = 1.0) -> np.ndarray:
-    """Shift colours in CIE Lab so that their weighted mean is `target` (RGB), keeping their spread
-    (shading, textures, darker parts); repeated because clipping to the RGB gamut eats part of
-    each shift. Returns new colours [n, 3]."""
-    import cv2
-
-    from ..metrics import rgb_to_lab
-
-    w = np.asarray(weights, dtype=np.float64)
-    w = w / max(float(w.sum()), 1e-12)
-    goal = rgb_to_lab(np.asarray(target, dtype=np.float64))
-    c = np.asarray(colors, dtype=np.float64).copy()
-    for _ in range(iterations):
-        lab = rgb_to_lab(c)
-        shift = goal - w @ lab
-        if np.linalg.norm(shift) < tolerance:
-            break
-        moved = (lab + shift).astype(np.float32).reshape(-1, 1, 3)
-        c = np.clip(cv2.cvtColor(moved, cv2.COLOR_Lab2RGB).reshape(-1, 3).astype(np.float64), 0.0, 1.0)
-    return c
