@@ -37,32 +37,33 @@ class WarmupStep:
 
 
 def _scene(detail: float = 1.0):
-    import morphosim_gym as ms
+    from morphosim_gym.generate.compose import GenerationConfig
+    from morphosim_gym.pipeline import MorphoSim
 
-    sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=detail))
+    sim = MorphoSim(reconstruction="oracle", generation=GenerationConfig(detail=detail))
     return sim.generate(PROMPT, seed=0)
 
 
 def _render_forward() -> None:
-    import morphosim_gym as ms
+    from morphosim_gym.render.api import render
 
     scene = _scene()
     cam = scene.camera.resized(64, 48)
-    ms.render(scene, cam, 0.5)
+    render(scene, cam, 0.5)
     g = scene.at(0.5)
     feats = np.zeros((len(g), 4), np.float32)
-    ms.render(g.replace(features=feats), cam, features=True)
+    render(g.replace(features=feats), cam, features=True)
 
 
 def _render_backward() -> None:
     import torch
 
-    import morphosim_gym as ms
+    from morphosim_gym.render.api import render
 
     scene = _scene(detail=0.3)
     g = scene.at(0.0).torch()
     colors = g.colors.clone().requires_grad_(True)
-    out = ms.render(g.replace(colors=colors), scene.camera.resized(32, 24))
+    out = render(g.replace(colors=colors), scene.camera.resized(32, 24))
     torch.as_tensor(out.rgb).sum().backward()
 
 
@@ -81,7 +82,7 @@ def _env(env_id: str) -> Callable[[], None]:
     def run() -> None:
         import gymnasium as gym
 
-        import morphosim_gym  # noqa: F401  (registers the envs)
+        import morphosim_gym.envs  # noqa: F401  (registers the envs)
 
         env = gym.make(env_id)
         try:
