@@ -116,17 +116,21 @@ def _skip_binary(path: Path, raw: bytes, pos: int, el: _Element, order: str) -> 
     """Offset after a binary element (rows walked one by one when it has list properties)."""
     if not el.lists:
         return pos + el.count * sum(np.dtype(t).itemsize for _, t in el.scalars)
-    sizes = [np.dtype(t).itemsize for _, t in el.scalars]
+    lists = {position: (ctype, itype) for position, ctype, itype in el.lists}
+    scalar_types = iter(t for _, t in el.scalars)
+    layout = [lists.get(i) or np.dtype(next(scalar_types)).itemsize for i in range(el.width)]
     for _ in range(el.count):
-        pos += sum(sizes)
-        for _, ctype, itype in el.lists:
-            ct = np.dtype(order + ctype)
+        for part in layout:
+            if isinstance(part, int):
+                pos += part
+                continue
+            ct = np.dtype(order + part[0])
             if pos + ct.itemsize > len(raw):
                 raise _fail(path, f"truncated in element {el.name!r}")
             n = int(np.frombuffer(raw, ct, 1, pos)[0])
             if n < 0:
                 raise _fail(path, f"negative list length {n} in element {el.name!r}")
-            pos += ct.itemsize + n * np.dtype(itype).itemsize
+            pos += ct.itemsize + n * np.dtype(part[1]).itemsize
         if pos > len(raw):
             raise _fail(path, f"truncated in element {el.name!r}")
     return pos
