@@ -164,7 +164,8 @@ def _tiny_clip() -> GeneratedClip:
     s = make_tiny_scene(n_per_object=8, frames=3)
     rng = np.random.default_rng(1)
     t = 3
-    return GeneratedClip(frames=rng.integers(0, 255, (t, 16, 16, 3), dtype=np.uint8), cameras=[s.camera.resized(16, 16)] * t,
+    return GeneratedClip(frames=rng.integers(0, 255, (t, 16, 16, 3), dtype=np.uint8),
+                         cameras=[s.camera.resized(16, 16)] * t,
                          fps=4.0, depth=rng.uniform(1, 5, (t, 16, 16)).astype(np.float32),
                          masks=rng.integers(-1, 3, (t, 16, 16)).astype(np.int32),
                          labels={0: "ground", 1: "ball", 2: "cube"}, prompt="a ball", ground_truth=s,
