@@ -170,7 +170,7 @@ def load_suite(source: str | Path | Mapping[str, Any]) -> Suite:
     """A `Suite` from a built-in name ("smoke"), a YAML path or a mapping; `SuiteError` on bad keys."""
     if isinstance(source, Mapping):
         return _suite_from_dict(source, "<mapping>", Path.cwd())
-    import yaml
+    from morphosim_gym.config_yaml import ConfigError, load_yaml_file
 
     text = str(source)
     path = Path(text)
@@ -180,10 +180,9 @@ def load_suite(source: str | Path | Mapping[str, Any]) -> Suite:
         raise SuiteError(f"Expected a built-in suite name in {builtin_suite_names()} or a suite YAML file, "
                          f"found {text!r}")
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        raise SuiteError(f"{path}: not valid YAML: {exc}") from None
+        data = load_yaml_file(path)
+    except ConfigError as exc:
+        raise SuiteError(str(exc)) from None
     return _suite_from_dict(data, str(path), path.parent)
 
 
@@ -200,7 +199,7 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     if not _NAME.match(name):
         raise SuiteError(f"Expected 'name' of letters, digits, '_', '.', '-' in suite {source}, found {name!r}")
     env_id = d["env"]
-    if env_id not in ENV_TASKS:
+    if not isinstance(env_id, str) or env_id not in ENV_TASKS:
         raise SuiteError(f"Expected 'env' in {list(ENV_TASKS)} in suite {source}, found {env_id!r}")
     task = _task(d.get("task"), d.get("scenes"), env_id, source, base_dir)
     env_kwargs = d.get("env_kwargs") or {}
