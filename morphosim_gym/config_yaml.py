@@ -23,7 +23,7 @@ from typing import Any
 
 import yaml
 
-__all__ = ["ConfigError", "MAX_ALIASES", "MAX_BYTES", "MAX_NODES", "expect", "load_yaml_file", "load_yaml_text"]
+__all__ = ["MAX_ALIASES", "MAX_BYTES", "MAX_NODES", "ConfigError", "expect", "load_yaml_file", "load_yaml_text"]
 
 MAX_ALIASES = 64            # our shipped files use none; anchors for a few shared blocks stay possible
 MAX_NODES = 100_000         # a suite or task file has a few hundred

@@ -13,8 +13,18 @@ The limits are generous for real use:
 
 from __future__ import annotations
 
-__all__ = ["MAX_CLIP_BYTES", "MAX_RENDER_SIDE", "MAX_RENDER_BYTES", "MAX_EPISODES", "CLIP_BYTES_PER_PIXEL",
-           "EPISODE_PLAN_BYTES", "format_bytes", "clip_bytes", "check_clip_size", "check_render_size"]
+__all__ = [
+    "CLIP_BYTES_PER_PIXEL",
+    "EPISODE_PLAN_BYTES",
+    "MAX_CLIP_BYTES",
+    "MAX_EPISODES",
+    "MAX_RENDER_BYTES",
+    "MAX_RENDER_SIDE",
+    "check_clip_size",
+    "check_render_size",
+    "clip_bytes",
+    "format_bytes",
+]
 
 MAX_CLIP_BYTES = 4 << 30
 MAX_RENDER_SIDE = 4096

@@ -14,7 +14,7 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["atomic_write", "sweep_stale_temps", "STALE_TEMP_SECONDS"]
+__all__ = ["STALE_TEMP_SECONDS", "atomic_write", "sweep_stale_temps"]
 
 STALE_TEMP_SECONDS = 15 * 60      # no write of one file takes this long
 _DEAD_GRACE_SECONDS = 2.0          # a temp file is created a moment before its writer is recorded

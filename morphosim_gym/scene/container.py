@@ -32,7 +32,7 @@ import numpy as np
 
 from .atomic import atomic_write
 
-__all__ = ["SceneFileError", "FORMAT_VERSION", "MAGIC", "write_container", "read_container", "peek_kind"]
+__all__ = ["FORMAT_VERSION", "MAGIC", "SceneFileError", "peek_kind", "read_container", "write_container"]
 
 MAGIC = b"MORPHOSIM4D\0"
 FORMAT_VERSION = 2

@@ -81,6 +81,45 @@ def _type(path: Path, word: str, line: str) -> str:
     return _TYPES[word]
 
 
+@dataclass
+class _Header:
+    path: Path
+    fmt: str | None = None
+    elements: list[_Element] = field(default_factory=list)
+
+
+def _h_format(h: _Header, parts: list[str]) -> bool:
+    if len(parts) != 3 or parts[1] not in _FORMATS:
+        return False
+    h.fmt = _FORMATS[parts[1]]
+    return True
+
+
+def _h_element(h: _Header, parts: list[str]) -> bool:
+    if len(parts) != 3 or not parts[2].isdigit():
+        return False
+    h.elements.append(_Element(parts[1], int(parts[2])))
+    return True
+
+
+def _h_property(h: _Header, parts: list[str]) -> bool:
+    if not h.elements:
+        return False
+    el, line = h.elements[-1], " ".join(parts)
+    if len(parts) == 3:
+        el.scalars.append((parts[2], _type(h.path, parts[1], line)))
+        return True
+    if len(parts) == 5 and parts[1] == "list":
+        el.lists.append((el.width, _type(h.path, parts[2], line), _type(h.path, parts[3], line)))
+        return True
+    return False
+
+
+# header keyword -> reader of its line (False: malformed)
+_HEADER_LINES = {"format": _h_format, "element": _h_element, "property": _h_property,
+                 "comment": lambda h, parts: True, "obj_info": lambda h, parts: True}
+
+
 def _parse_header(path: Path, raw: bytes) -> tuple[str, list[_Element], int]:
     """(format byte-order prefix or "" for ascii, elements in order, offset of the body)."""
     if not raw.startswith(b"ply"):
@@ -90,25 +129,14 @@ def _parse_header(path: Path, raw: bytes) -> tuple[str, list[_Element], int]:
         raise _fail(path, "not a PLY file (no 'end_header' in the first MiB)")
     body = end + len(b"end_header")
     body += 2 if raw[body:body + 2] == b"\r\n" else 1
-    fmt, elements = None, []
+    h = _Header(path)
     for line in raw[:end].decode("ascii", errors="replace").splitlines()[1:]:
         parts = line.split()
-        if not parts or parts[0] in ("comment", "obj_info"):
-            continue
-        if parts[0] == "format" and len(parts) == 3 and parts[1] in _FORMATS:
-            fmt = _FORMATS[parts[1]]
-        elif parts[0] == "element" and len(parts) == 3 and parts[2].isdigit():
-            elements.append(_Element(parts[1], int(parts[2])))
-        elif parts[0] == "property" and elements and len(parts) == 3:
-            elements[-1].scalars.append((parts[2], _type(path, parts[1], line)))
-        elif parts[0] == "property" and elements and len(parts) == 5 and parts[1] == "list":
-            el = elements[-1]
-            el.lists.append((el.width, _type(path, parts[2], line), _type(path, parts[3], line)))
-        else:
+        if parts and not (parts[0] in _HEADER_LINES and _HEADER_LINES[parts[0]](h, parts)):
             raise _fail(path, f"malformed header line {line!r}")
-    if fmt is None:
+    if h.fmt is None:
         raise _fail(path, f"expected a 'format' line with one of {sorted(_FORMATS)}")
-    return fmt, elements, body
+    return h.fmt, h.elements, body
 
 
 # --------------------------------------------------------------------- body
