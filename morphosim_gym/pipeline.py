@@ -16,7 +16,9 @@ from typing import Any, Optional
 
 from .errors import CommandError
 from .generate.compose import GenerationConfig
-from .scene import GeneratedClip, Scene4D, SceneFileError, load_clip, load_scene, save_clip, save_scene
+from .generate.version import GENERATOR_VERSION
+from .scene import GeneratedClip, Scene4D, load_clip, load_scene, save_clip, save_scene
+from .scene.diskcache import load_or_build
 
 __all__ = ["MorphoSim", "SimConfig", "RECONSTRUCTIONS", "default_cache_dir"]
 
@@ -101,13 +103,10 @@ class MorphoSim:
                                f"({prompt!r}); use sim.edit(scene, text) for edits")
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise ValueError(f"Expected seed as a non-negative integer, found {seed!r}")
-        path = self._cache_path("clip", prompt, seed) if self.config.cache else None
-        if path is not None and path.exists():
-            return load_clip(path)
-        clip = self._generator.generate(plan, seed, prompt)
-        if path is not None:
-            save_clip(clip, path)
-        return clip
+        if not self.config.cache:
+            return self._generator.generate(plan, seed, prompt)
+        return load_or_build(self._cache_path("clip", prompt, seed), load_clip,
+                             lambda: self._generator.generate(plan, seed, prompt), save_clip)
 
     def reconstruct(self, clip: GeneratedClip) -> Scene4D:
         """The 4D scene of a clip: fitted to it (default), or with `reconstruction="oracle"` its ground truth."""
@@ -159,21 +158,17 @@ class MorphoSim:
     # ---------------------------------------------------------------- cache
     def _cached_oracle_scene(self, plan: Any, prompt: str, seed: int) -> Scene4D:
         """The composed ground truth of a prompt, through the on-disk cache: parallel workers (a
-        benchmark sweep) generate each scene once and load it bit-exact (writes are atomic)."""
-        path = self._cache_path("scene", prompt, seed, ".msim")
-        if path.exists():
-            try:
-                return load_scene(path)
-            except SceneFileError:                  # a damaged entry: compose again and replace it
-                pass
-        scene = self._generator.compose(plan, seed, prompt).scene
-        save_scene(scene, path, history=False)
-        return scene
+        benchmark sweep) generate each scene once and load it bit-exact (writes are atomic; a damaged
+        entry is composed again and replaced, with a warning)."""
+        return load_or_build(self._cache_path("scene", prompt, seed, ".msim"), load_scene,
+                             lambda: self._generator.compose(plan, seed, prompt).scene,
+                             lambda scene, path: save_scene(scene, path, history=False))
 
     def _cache_path(self, kind: str, prompt: str, seed: int, suffix: str = ".mclip") -> Path:
+        """Where a clip or scene is cached: a hash of what decides it, the generator's version included."""
         root = Path(self.config.cache_dir) if self.config.cache_dir else default_cache_dir()
         key = json.dumps({"prompt": prompt, "seed": seed, "generation": asdict(self.config.generation),
-                          "generator": self.config.generator, "version": 1}, sort_keys=True)
+                          "generator": self.config.generator, "version": GENERATOR_VERSION}, sort_keys=True)
         digest = hashlib.sha256(key.encode()).hexdigest()[:24]
         return root / kind / f"{digest}{suffix}"
 

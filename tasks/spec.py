@@ -209,6 +209,7 @@ class TaskSpec:
         s = d["scenes"]
         if not isinstance(s, Mapping):
             raise ValueError(f"Expected scenes to be a mapping in {source}, found {type(s).__name__}")
+        _check_types(d, source)
         s_known = {"prompt", "fields", "target", "target_color", "distractors"}
         if set(s) - s_known:
             raise ValueError(f"Expected keys of scenes in {sorted(s_known)}, found unknown {sorted(set(s) - s_known)} "
@@ -239,6 +240,37 @@ class TaskSpec:
                    str(d.get("description", "")))
 
 
+# the type of every scalar a task file holds (key path -> kind of `config_yaml.expect`; "?" = or null)
+_TYPES = {("name",): "text", ("kind",): "string", ("instruction",): "text", ("description",): "text",
+          ("scenes", "prompt"): "text", ("scenes", "target"): "string", ("scenes", "target_color"): "string?",
+          ("scenes", "distractors"): "mapping?", ("params",): "mapping?"}
+_DISTRACTOR_TYPES = {"count": "list", "objects": "list", "colors": "list"}
+
+
+def _check_types(d: Mapping[str, Any], source: str) -> None:
+    """`ConfigError` ("<source>: key 'scenes.target': expected a string, found [1]") for a value of the
+    wrong type, before any is used (a wrong type used to surface as a raw TypeError)."""
+    from morphosim_gym.config_yaml import expect
+
+    for keys, kind in _TYPES.items():
+        parent: Any = d
+        for k in keys[:-1]:
+            parent = parent.get(k) if isinstance(parent, Mapping) else None
+        if not isinstance(parent, Mapping) or keys[-1] not in parent:
+            continue
+        value = parent[keys[-1]]
+        if not (kind.endswith("?") and value is None):
+            expect(value, kind.rstrip("?"), ".".join(keys), source)
+    dd = d["scenes"].get("distractors") or {}
+    for k, kind in _DISTRACTOR_TYPES.items():
+        if k in dd:
+            expect(dd[k], kind, f"scenes.distractors.{k}", source)
+    for i, v in enumerate(dd.get("count", ())):
+        expect(v, "integer", f"scenes.distractors.count[{i}]", source)
+    for k, v in (d.get("params") or {}).items():
+        expect(v, "number", f"params.{k}", source)
+
+
 def builtin_task_names() -> list[str]:
     """Names of the task files that ship with the package (`tasks/*.yaml`)."""
     return sorted(p.stem for p in TASK_DIR.glob("*.yaml"))
@@ -250,7 +282,7 @@ def load_task_spec(source: str | Path | Mapping[str, Any] | TaskSpec) -> TaskSpe
         return source
     if isinstance(source, Mapping):
         return TaskSpec.from_dict(source)
-    import yaml
+    from morphosim_gym.config_yaml import ConfigError, load_yaml_file
 
     text = str(source)
     path = Path(text)
@@ -258,7 +290,11 @@ def load_task_spec(source: str | Path | Mapping[str, Any] | TaskSpec) -> TaskSpe
         path = TASK_DIR / f"{text}.yaml"
     if not path.exists():
         raise ValueError(f"Expected a built-in task name in {builtin_task_names()} or a YAML file, found {text!r}")
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
-    return TaskSpec.from_dict(data, source=str(path))
+    data = load_yaml_file(path)
+    try:
+        return TaskSpec.from_dict(data, source=str(path))
+    except ValueError as exc:
+        if str(path) in str(exc):
+            raise
+        raise ConfigError(f"{path}: {exc}") from None
 

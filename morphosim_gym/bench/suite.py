@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any, Mapping, Optional
 
 from morphosim_gym.envs import ENTRY_POINTS, env_id_of
+from morphosim_gym.limits import EPISODE_PLAN_BYTES, MAX_EPISODES, format_bytes
 from morphosim_gym.tasks import TASK_DIR, TaskSpec, load_task_spec
 
 __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "builtin_suite_names", "SUITE_DIR",
@@ -145,7 +146,7 @@ class Suite:
         """The same suite with another episode count."""
         from dataclasses import replace
 
-        return replace(self, episodes=_positive_int(episodes, "episodes", self.source))
+        return replace(self, episodes=_episodes(episodes, self.source, 1 + len(self.perturbations)))
 
     def digest(self) -> str:
         """A content hash of everything that decides what an episode of a given seed is (not the file
@@ -171,7 +172,7 @@ def load_suite(source: str | Path | Mapping[str, Any]) -> Suite:
     """A `Suite` from a built-in name ("smoke"), a YAML path or a mapping; `SuiteError` on bad keys."""
     if isinstance(source, Mapping):
         return _suite_from_dict(source, "<mapping>", Path.cwd())
-    import yaml
+    from morphosim_gym.config_yaml import ConfigError, load_yaml_file
 
     text = str(source)
     path = Path(text)
@@ -181,10 +182,9 @@ def load_suite(source: str | Path | Mapping[str, Any]) -> Suite:
         raise SuiteError(f"Expected a built-in suite name in {builtin_suite_names()} or a suite YAML file, "
                          f"found {text!r}")
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        raise SuiteError(f"{path}: not valid YAML: {exc}") from None
+        data = load_yaml_file(path)
+    except ConfigError as exc:
+        raise SuiteError(str(exc)) from None
     return _suite_from_dict(data, str(path), path.parent)
 
 
@@ -201,7 +201,7 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     if not _NAME.match(name):
         raise SuiteError(f"Expected 'name' of letters, digits, '_', '.', '-' in suite {source}, found {name!r}")
     env_id = d["env"]
-    if env_id not in ENV_TASKS:
+    if not isinstance(env_id, str) or env_id not in ENV_TASKS:
         raise SuiteError(f"Expected 'env' in {list(ENV_TASKS)} in suite {source}, found {env_id!r}")
     task = _task(d.get("task"), d.get("scenes"), env_id, source, base_dir)
     env_kwargs = d.get("env_kwargs") or {}
@@ -222,7 +222,7 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     if isinstance(frames, bool) or not isinstance(frames, int) or not 0 <= frames <= 12:
         raise SuiteError(f"Expected 'frames' as an integer in [0, 12] in suite {source}, found {frames!r}")
     return Suite(name=name, env_id=env_id, task=task, seed=_nonneg_int(d.get("seed", 0), "seed", source),
-                 episodes=_positive_int(d.get("episodes", 10), "episodes", source), perturbations=items,
+                 episodes=_episodes(d.get("episodes", 10), source, 1 + len(items)), perturbations=items,
                  env_kwargs=dict(env_kwargs), frames=frames, description=str(d.get("description", "")),
                  source=source)
 
@@ -315,3 +315,14 @@ def _positive_int(v: Any, key: str, source: str) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
         raise SuiteError(f"Expected {key!r} as an integer >= 1 in suite {source}, found {v!r}")
     return v
+
+
+def _episodes(v: Any, source: str, conditions: int) -> int:
+    """An episode count in [1, MAX_EPISODES]; the error states what a larger sweep would hold in memory."""
+    n = _positive_int(v, "episodes", source)
+    if n > MAX_EPISODES:
+        planned = n * conditions
+        raise SuiteError(f"Expected 'episodes' as an integer in [1, {MAX_EPISODES}] in suite {source}, found {n}: "
+                         f"{planned} planned episodes ({conditions} conditions) would need "
+                         f"{format_bytes(planned * EPISODE_PLAN_BYTES)} of bookkeeping before the first one ran")
+    return n

@@ -22,6 +22,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..limits import check_clip_size
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
@@ -71,6 +72,7 @@ class GenerationConfig:
             v = getattr(self, k)
             if not (isinstance(v, int) and 16 <= v <= 4096):
                 raise ValueError(f"Expected {k} in [16, 4096], found {v!r}")
+        check_clip_size(self.num_frames, self.width, self.height)
         if not 0 < self.detail <= 16:
             raise ValueError(f"Expected detail in (0, 16], found {self.detail!r}")
         if not 0 < self.frame_fraction < 1:

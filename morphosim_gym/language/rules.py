@@ -47,6 +47,7 @@ from .grounding import (ALL_WORDS, CAMERA_WORDS, SceneItem, ground_noun, ground_
 from .lexicon import (AUX, CLOCKWISE_WORDS, COLLECTIVE_NOUNS, DIRECTION_WORDS, DIRECTIONS, FAR_WORDS, NUMBER_WORDS,
                       PLURAL_DEFAULT_COUNT, SIZE_WORDS, SPEED_PHRASES, SPEED_VERBS, VERBS, VIEWER_WORDS,
                       correct_typo, lexicon_words, vec_norm, verb_info)
+from .count_words import refuse_unbounded_count
 from .plan import (MAX_COUNT, CameraSpec, ColorSpec, EditOp, MotionSpec, ObjectSpec, Plan, Target)
 from .vocabulary import CATEGORIES, DEFAULT_SETTING, noun_to_category, singular, word_to_setting
 
@@ -217,6 +218,7 @@ def _number_at(toks: Sequence[str], i: int) -> tuple[int, int] | None:
     if i >= len(toks):
         return None
     w = toks[i]
+    refuse_unbounded_count(toks, i)
     if _is_number(w):
         v = float(w)
         if v != int(v):
@@ -237,6 +239,7 @@ def _number_at(toks: Sequence[str], i: int) -> tuple[int, int] | None:
         if w == "and" and j + 1 < len(toks) and toks[j + 1] in _COMPOUND_NUMBER and current >= 100:
             j += 1
             continue
+        refuse_unbounded_count(toks, j)
         v = _COMPOUND_NUMBER.get(w)
         if v is None:
             break

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..scene import GeneratedClip, Provenance, Scene4D, SceneObject, load_scene, save_scene
+from ..scene.diskcache import load_or_build
 from .features import FeatureConfig, distill_features
 from .fit import FitConfig, fit
 from .initialize import InitConfig, initialize
@@ -115,9 +116,12 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
     clip lacks what the method needs."""
     cfg = config or ReconstructionConfig()
     validate_clip(clip)
-    path = cache_path(clip, cfg) if cfg.cache else None
-    if path is not None and path.exists():
-        return load_scene(path)
+    if cfg.cache:
+        return load_or_build(cache_path(clip, cfg), load_scene, lambda: _fit_scene(clip, cfg), save_scene)
+    return _fit_scene(clip, cfg)
+
+
+def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
     start = time.perf_counter()
     fit_cfg = cfg.fit if cfg.progress else _no_progress(cfg.fit)
     feat_cfg = cfg.features if cfg.progress else _no_progress(cfg.features)
@@ -151,8 +155,6 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
                     provenance=Provenance(clip.prompt or None, clip.info.get("seed"), clip.info.get("backend", "clip"),
                                           f"fit:{cache_key(clip, cfg)}"),
                     background=background)
-    if path is not None:
-        save_scene(scene, path)
     scene._fit_log = {"fit": fit_log, "features": feat_log, "seconds": seconds}  # for reports (not saved)
     return scene
 

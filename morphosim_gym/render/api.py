@@ -13,6 +13,7 @@ from typing import Any, Optional, Sequence, Union
 import numpy as np
 
 from ..errors import BackendUnavailableError
+from ..limits import check_render_size
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
@@ -105,6 +106,7 @@ def render(
     single = isinstance(camera, Camera)
     cams = [camera] if single else list(camera)
     viewmats, Ks, nears, width, height = cameras_to_arrays(cams)
+    check_render_size(len(cams), width, height, g.feature_dim if features else 0)
 
     if g.is_torch:
         import torch
@@ -203,6 +205,7 @@ def rasterize(
     if viewmats.ndim != 3 or viewmats.shape[1:] != (4, 4) or Ks.shape != (viewmats.shape[0], 3, 3):
         raise ValueError(f"Expected viewmats [C, 4, 4] and Ks [C, 3, 3], found {tuple(viewmats.shape)} "
                          f"and {tuple(Ks.shape)}")
+    check_render_size(viewmats.shape[0], width, height, 0 if features is None else features.shape[1])
     if nears is None:
         nears = torch.full((viewmats.shape[0],), 0.01, dtype=torch.float64)
     if backend == "cpu":

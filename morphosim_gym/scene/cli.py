@@ -20,26 +20,37 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_export)
 
 
-def _info(args: argparse.Namespace) -> int:
-    from .io import SceneFileError, load_clip, load_scene
+def _scene_summary(path: str) -> dict:
+    from .io import load_scene
 
-    try:
-        scene = load_scene(args.path)
-        summary = {
-            "kind": "scene", "gaussians": len(scene.gaussians), "frames": scene.num_frames, "fps": scene.fps,
+    scene = load_scene(path)
+    return {"kind": "scene", "gaussians": len(scene.gaussians), "frames": scene.num_frames, "fps": scene.fps,
             "duration_s": scene.duration, "objects": [o.to_dict() for o in scene.objects],
             "feature_dim": scene.gaussians.feature_dim, "decoders": sorted(scene.decoders),
-            "provenance": scene.provenance.to_dict(), "content_hash": scene.content_hash(),
-        }
-    except SceneFileError as exc:
-        if "holds a 'clip'" not in str(exc):
-            raise
-        clip = load_clip(args.path)
-        summary = {"kind": "clip", "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
-                   "prompt": clip.prompt, "labels": clip.labels,
-                   "priors": [n for n in ("depth", "masks", "tracks") if getattr(clip, n) is not None],
-                   "has_ground_truth": clip.ground_truth is not None}
-    print(json.dumps(summary, indent=2))
+            "provenance": scene.provenance.to_dict(), "content_hash": scene.content_hash()}
+
+
+def _clip_summary(path: str) -> dict:
+    from .io import load_clip
+
+    clip = load_clip(path)
+    return {"kind": "clip", "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
+            "prompt": clip.prompt, "labels": clip.labels,
+            "priors": [n for n in ("depth", "masks", "tracks") if getattr(clip, n) is not None],
+            "has_ground_truth": clip.ground_truth is not None}
+
+
+_SUMMARIES = {"scene": _scene_summary, "clip": _clip_summary}
+
+
+def _info(args: argparse.Namespace) -> int:
+    """Print a file's summary; a damaged file is a `SceneFileError` (the caller prints it, exit 2)."""
+    from .io import SceneFileError, peek_kind
+
+    kind = peek_kind(args.path)
+    if kind not in _SUMMARIES:
+        raise SceneFileError(f"{args.path}: holds a {kind!r}, expected one of {sorted(_SUMMARIES)}")
+    print(json.dumps(_SUMMARIES[kind](args.path), indent=2))
     return 0
 
 

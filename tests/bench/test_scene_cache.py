@@ -1,6 +1,9 @@
 """MorphoSim's on-disk cache of oracle scenes: what the benchmark workers share."""
 
+import pytest
+
 import morphosim_gym as ms
+from morphosim_gym.scene.diskcache import DamagedCacheEntryWarning
 
 PROMPT = "a red ball moves from left to right next to a blue cube"
 
@@ -16,4 +19,5 @@ def test_oracle_scenes_are_cached_on_disk_bit_exact(tmp_path):
     cached.generate(PROMPT, seed=4)
     assert len(list((tmp_path / "scene").glob("*.msim"))) == 2
     files[0].write_bytes(b"damaged")                         # a damaged entry is regenerated, not fatal
-    assert cached.generate(PROMPT, seed=3).content_hash() == first.content_hash()
+    with pytest.warns(DamagedCacheEntryWarning, match=files[0].name):
+        assert cached.generate(PROMPT, seed=3).content_hash() == first.content_hash()
