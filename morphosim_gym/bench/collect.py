@@ -138,40 +138,51 @@ def _inputs(out: Path, plan: list[EpisodeKey], done: dict[str, dict]) -> list[Ep
             for k in ok]
 
 
-def run_collect(suite: Suite, policies: Sequence[str], out: str | Path, backend: str = "local", workers: int = 1,
-                cache_dir: Optional[str] = None, address: Optional[str] = None, progress: bool = True,
-                video: VideoSettings = VideoSettings()) -> CollectResult:
-    """Run (or resume) the episodes of `suite` for each policy spec and write the dataset to `out`."""
+def _check_args(backend: str, policies: Sequence[str], video: VideoSettings) -> None:
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
     if not policies or len(set(policies)) != len(policies):
         raise ValueError(f"Expected one or more distinct policies, found {list(policies)!r}")
     for spec in policies:
-        resolve_policy(spec)
+        resolve_policy(spec)                            # an unknown policy stops the run before it starts
     video.available()
-    schema, fps, robot = _schema(suite, cache_dir)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    _check_manifest(out, _manifest(suite, policies, video))
-    start = time.perf_counter()
-    store = ResultStore(out / RESULTS_LOG)
-    done = store.load()
-    plan = plan_episodes(suite, policies)
-    pending = [k for k in plan if k.id not in done]
-    bar = _progress(len(plan), len(plan) - len(pending), suite.name, backend) if progress else None
-    with store:
-        jobs = [(k, 0, True) for k in pending]
+
+
+def _run_pending(out: Path, suite: Suite, pending: list[EpisodeKey], done: dict[str, dict], backend: str,
+                 workers: int, cache_dir: Optional[str], address: Optional[str], bar: Any) -> None:
+    """Run `pending`, staging each episode's steps and then logging its record (so logged => staged)."""
+    jobs = [(k, 0, True) for k in pending]
+    with ResultStore(out / RESULTS_LOG) as store:
         for res in run_backend(backend, suite, sorted({k.seed for k in pending}), jobs, cache_dir, workers, address):
             key = EpisodeKey(res.record["policy"], res.record["perturbation"], res.record["seed"])
             if res.steps is not None:
-                save_staged(staged_path(out, key), res.steps)        # before the log line: logged => staged
+                save_staged(staged_path(out, key), res.steps)
             record = dict(res.record, key=key.id, frames=len(res.steps) if res.steps is not None else 0)
             store.append(record)
             done[key.id] = record
             if bar is not None:
                 bar.update(1)
-    if bar is not None:
-        bar.close()
+
+
+def run_collect(suite: Suite, policies: Sequence[str], out: str | Path, backend: str = "local", workers: int = 1,
+                cache_dir: Optional[str] = None, address: Optional[str] = None, progress: bool = True,
+                video: VideoSettings = VideoSettings()) -> CollectResult:
+    """Run (or resume) the episodes of `suite` for each policy spec and write the dataset to `out`."""
+    _check_args(backend, policies, video)
+    schema, fps, robot = _schema(suite, cache_dir)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    _check_manifest(out, _manifest(suite, policies, video))
+    start = time.perf_counter()
+    done = ResultStore(out / RESULTS_LOG).load()
+    plan = plan_episodes(suite, policies)
+    pending = [k for k in plan if k.id not in done]
+    bar = _progress(len(plan), len(plan) - len(pending), suite.name, backend) if progress else None
+    try:
+        _run_pending(out, suite, pending, done, backend, workers, cache_dir, address, bar)
+    finally:
+        if bar is not None:
+            bar.close()
     info = write_dataset(out, schema, fps, _inputs(out, plan, done), video, robot_type=robot)
     failed = sum(done[k.id]["status"] != "ok" for k in plan)
     return CollectResult(out, info, len(pending), len(plan) - len(pending), failed, time.perf_counter() - start)

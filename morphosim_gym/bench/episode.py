@@ -70,7 +70,17 @@ class EpisodeSteps:
         return len(self.actions)
 
 
-class _StepLog:
+class _NoLog:
+    """Keeps no steps (an episode run without `keep_steps`)."""
+
+    def add(self, obs: dict, info: dict, action: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
+        pass
+
+    def result(self, reward: float, terminated: bool, truncated: bool, success: bool) -> None:
+        pass
+
+
+class _StepLog(_NoLog):
     """Collects the rows of `EpisodeSteps` during an episode."""
 
     def __init__(self) -> None:
@@ -168,7 +178,7 @@ class EpisodeRunner:
                                   "success": None, "return": None, "steps": 0, "terminated": False, "perturbed": False,
                                   "metrics": {}}
         strip = None
-        log = _StepLog() if keep_steps else None
+        log = _StepLog() if keep_steps else _NoLog()
         try:
             strip = self._episode(key, frames, record, log)
         except _Failure as exc:
@@ -178,11 +188,11 @@ class EpisodeRunner:
             record.update(status="failed", error=f"{_text(exc)} (at {tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})",
                           error_stage="env")
         record["wall_s"] = round(time.perf_counter() - start, 4)
-        steps = log.steps() if log is not None and record["status"] == "ok" else None
+        steps = log.steps() if isinstance(log, _StepLog) and record["status"] == "ok" else None
         return EpisodeResult(record, strip, steps)
 
     # ------------------------------------------------------------------ parts
-    def _episode(self, key: EpisodeKey, frames: int, record: dict, log: Optional[_StepLog]) -> Optional[np.ndarray]:
+    def _episode(self, key: EpisodeKey, frames: int, record: dict, log: _NoLog) -> Optional[np.ndarray]:
         suite = self.suite
         pert = suite.perturbation(key.perturbation)
         if pert.error:
@@ -219,7 +229,7 @@ class EpisodeRunner:
         return self._loop(env, act, obs, info, pert.at, edits, frames, record, log)
 
     def _loop(self, env: LanguagePerturbation, act: Any, obs: Any, info: dict, at: int, edits: tuple[str, ...],
-              frames: int, record: dict, log: Optional[_StepLog] = None) -> Optional[np.ndarray]:
+              frames: int, record: dict, log: _NoLog) -> Optional[np.ndarray]:
         u = env.unwrapped
         horizon = max(int(round(u.world.duration / u.dt)), 1)
         keep = sorted(set(np.round(np.linspace(0, horizon, frames)).astype(int).tolist())) if frames else []
@@ -232,8 +242,7 @@ class EpisodeRunner:
             except Exception as exc:
                 raise _Failure("policy", f"the policy raised {_text(exc)} at step {step}") from None
             a = _check_action(action, space.shape, step)
-            if log is not None:
-                log.add(obs, info, a, space.low, space.high)
+            log.add(obs, info, a, space.low, space.high)
             step += 1
             try:
                 obs, reward, terminated, truncated, info = env.step(a)      # the wrapper applies the edits due
@@ -242,8 +251,7 @@ class EpisodeRunner:
                     raise
                 raise _Failure("perturbation", f"{_text(exc)} (before step {step})") from None
             total += float(reward)
-            if log is not None:
-                log.result(reward, terminated, truncated, info["success"])
+            log.result(reward, terminated, truncated, info["success"])
             if step in keep:
                 shots[step] = obs["rgb"].copy()
             if terminated or truncated:

@@ -170,6 +170,51 @@ def _clear(layout: DatasetLayout) -> None:
             shutil.rmtree(p)
 
 
+class _Episodes:
+    """Writes episodes one after another into the data and video files; keeps their rows, stats, tasks."""
+
+    def __init__(self, layout: DatasetLayout, schema: FrameSchema, fps: int, video: VideoSettings,
+                 data_file_mb: float, video_file_mb: float, chunks_size: int) -> None:
+        self.schema, self.fps = schema, fps
+        self.data = _ParquetFiles(layout, layout.data, data_file_mb, chunks_size)
+        self.videos = {key: VideoFileWriter(layout, key, fps, video, video_file_mb, chunks_size)
+                       for key in schema.video_keys}
+        self.tasks: dict[str, int] = {}
+        self.rows: list[dict] = []
+        self.stats: list[dict] = []
+        self.frames = 0
+
+    def add(self, ep: EpisodeInput) -> None:
+        schema, ep_index = self.schema, len(self.rows)
+        steps = load_staged(ep.staged)
+        schema.check(steps.observations, steps.actions, str(ep.staged))
+        for text in steps.instructions:
+            self.tasks.setdefault(text, len(self.tasks))
+        task_index = np.array([self.tasks[s] for s in steps.instructions], np.int64)
+        table = _frame_table(schema, steps, ep_index, self.frames, self.fps, task_index)
+        chunk, file = self.data.append(table)
+        row: dict[str, Any] = {"episode_index": ep_index, "tasks": list(dict.fromkeys(steps.instructions)),
+                               "length": len(steps), "data/chunk_index": chunk, "data/file_index": file,
+                               "dataset_from_index": self.frames, "dataset_to_index": self.frames + len(steps)}
+        for (obs_key, _), key in zip(schema.cameras, schema.video_keys):
+            row.update(self.videos[key].append(steps.observations[obs_key]))
+        stats = _episode_stats(schema, steps, table)
+        for feat, st in stats.items():
+            row.update({f"stats/{feat}/{k}": np.asarray(v).tolist() for k, v in st.items()})
+        row.update(ep.extra)
+        self.rows.append(row)
+        self.stats.append(stats)
+        self.frames += len(steps)
+
+    def close(self) -> None:
+        self.data.close()
+        for w in self.videos.values():
+            w.close()
+
+    def merged_stats(self) -> dict:
+        return {k: merge_stats([s[k] for s in self.stats]) for k in (self.stats[0] if self.stats else {})}
+
+
 def write_dataset(root: str | Path, schema: FrameSchema, fps: int, episodes: Sequence[EpisodeInput],
                   video: VideoSettings = VideoSettings(), robot_type: Optional[str] = None,
                   data_file_mb: float = DATA_FILE_MB, video_file_mb: float = VIDEO_FILE_MB,
@@ -181,47 +226,22 @@ def write_dataset(root: str | Path, schema: FrameSchema, fps: int, episodes: Seq
     video.available()
     layout = DatasetLayout(Path(root))
     _clear(layout)
-    data = _ParquetFiles(layout, layout.data, data_file_mb, chunks_size)
-    videos = {key: VideoFileWriter(layout, key, fps, video, video_file_mb, chunks_size) for key in schema.video_keys}
-    tasks: dict[str, int] = {}
-    rows: list[dict] = []
-    all_stats: list[dict] = []
-    frames = 0
+    eps = _Episodes(layout, schema, fps, video, data_file_mb, video_file_mb, chunks_size)
     try:
-        for ep_index, ep in enumerate(episodes):
-            steps = load_staged(ep.staged)
-            schema.check(steps.observations, steps.actions, str(ep.staged))
-            for text in steps.instructions:
-                tasks.setdefault(text, len(tasks))
-            task_index = np.array([tasks[s] for s in steps.instructions], np.int64)
-            table = _frame_table(schema, steps, ep_index, frames, fps, task_index)
-            chunk, file = data.append(table)
-            row: dict[str, Any] = {"episode_index": ep_index, "tasks": list(dict.fromkeys(steps.instructions)),
-                                   "length": len(steps), "data/chunk_index": chunk, "data/file_index": file,
-                                   "dataset_from_index": frames, "dataset_to_index": frames + len(steps)}
-            for (obs_key, _), key in zip(schema.cameras, schema.video_keys):
-                row.update(videos[key].append(steps.observations[obs_key]))
-            stats = _episode_stats(schema, steps, table)
-            all_stats.append(stats)
-            for feat, s in stats.items():
-                row.update({f"stats/{feat}/{k}": np.asarray(v).tolist() for k, v in s.items()})
-            row.update(ep.extra)
-            rows.append(row)
-            frames += len(steps)
+        for ep in episodes:
+            eps.add(ep)
     finally:
-        data.close()
-        for w in videos.values():
-            w.close()
-    if rows:
-        _write_episodes(layout, rows, data_file_mb, chunks_size)
-    _write_tasks(layout, tasks)
-    merged = {k: merge_stats([s[k] for s in all_stats]) for k in (all_stats[0] if all_stats else {})}
-    _json(layout.stats, to_json(merged))
-    infos = {key: video_info(layout.video(key, 0, 0), video) for key in schema.video_keys} if rows else {}
-    info = {"codebase_version": CODEBASE_VERSION, "robot_type": robot_type, "total_episodes": len(rows),
-            "total_frames": frames, "total_tasks": len(tasks), "chunks_size": chunks_size,
+        eps.close()
+    if eps.rows:
+        _write_episodes(layout, eps.rows, data_file_mb, chunks_size)
+    _write_tasks(layout, eps.tasks)
+    _json(layout.stats, to_json(eps.merged_stats()))
+    infos = {key: video_info(layout.video(key, 0, 0), video) for key in schema.video_keys} if eps.rows else {}
+    n = len(eps.rows)
+    info = {"codebase_version": CODEBASE_VERSION, "robot_type": robot_type, "total_episodes": n,
+            "total_frames": eps.frames, "total_tasks": len(eps.tasks), "chunks_size": chunks_size,
             "data_files_size_in_mb": data_file_mb, "video_files_size_in_mb": video_file_mb, "fps": fps,
-            "splits": {"train": f"0:{len(rows)}"}, "data_path": DATA_PATH, "video_path": VIDEO_PATH,
+            "splits": {"train": f"0:{n}"}, "data_path": DATA_PATH, "video_path": VIDEO_PATH,
             "features": schema.features(infos)}
     _json(layout.info, info)                               # last: the dataset is complete
     return info
