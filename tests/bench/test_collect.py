@@ -266,3 +266,12 @@ def test_cli_collect_h264(tmp_path, cache_dir, capsys):
     assert main(["collect", str(path), "--out", str(out), "--policy", "random", "--cache-dir", cache_dir,
                  "--no-progress"]) == 255
     assert "another run" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_ray_backend_writes_the_same_dataset(collected, suite, tmp_path, cache_dir):
+    pytest.importorskip("ray")
+    ray_result = run_collect(suite, POLICIES, tmp_path / "ray", backend="ray", workers=2, cache_dir=cache_dir,
+                             progress=False)
+    assert (ray_result.ran, ray_result.failed) == (collected.ran, collected.failed)
+    assert _files(ray_result.out) == _files(collected.out)
