@@ -84,8 +84,10 @@ def _manifest(suite: Suite, policies: Sequence[str], video: VideoSettings) -> di
 def _check_manifest(out: Path, mine: dict) -> None:
     path = out / COLLECT_MANIFEST
     if not path.exists():
-        if (out / RESULTS_LOG).exists() or (out / "meta" / "info.json").exists():
-            raise SuiteError(f"{out} holds results or a dataset not written by morphosim collect; use another --out")
+        found = sorted(p.name for p in out.iterdir())
+        if found:               # the dataset write replaces data/, videos/, meta/: never in someone else's folder
+            raise SuiteError(f"{out} is not empty ({found[:3]}) and not a morphosim collect folder (no "
+                             f"{COLLECT_MANIFEST}); use an empty or new --out")
         atomic_write_bytes(path, (json.dumps(mine, indent=2) + "\n").encode())
         return
     try:

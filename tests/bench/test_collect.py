@@ -240,10 +240,12 @@ def test_another_runs_folder_is_refused(collected, suite, cache_dir):
         run_collect(other, POLICIES, collected.out, cache_dir=cache_dir, progress=False)
 
 
-def test_bench_folder_is_refused(tmp_path, suite, cache_dir):
-    (tmp_path / RESULTS_LOG).write_text("")
-    with pytest.raises(SuiteError, match="not written by morphosim collect"):
+def test_a_folder_of_something_else_is_refused(tmp_path, suite, cache_dir):
+    (tmp_path / RESULTS_LOG).write_text("")                          # e.g. a morphosim bench sweep
+    (tmp_path / "data").mkdir()
+    with pytest.raises(SuiteError, match="not empty.*not a morphosim collect folder"):
         run_collect(suite, POLICIES, tmp_path, cache_dir=cache_dir, progress=False)
+    assert (tmp_path / "data").is_dir() and not (tmp_path / COLLECT_MANIFEST).exists()
 
 
 def test_task_suite_has_only_base_episodes():

@@ -8,6 +8,7 @@ k / fps and an episode's frames are `[from_timestamp, to_timestamp)` of its file
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Optional
@@ -133,6 +134,7 @@ class VideoFileWriter:
         if self.settings.pix_fmt == "yuv420p" and (width % 2 or height % 2):
             raise ValueError(f"Expected even image sizes for pix_fmt yuv420p, found {width}x{height}")
         av = _av()
+        os.environ.setdefault("SVT_LOG", "1")          # SVT-AV1 prints errors only (not its banner per file)
         self._path = self.layout.video(self.key, self.cursor.chunk_index, self.cursor.file_index)
         self._path.parent.mkdir(parents=True, exist_ok=True)
         self._container = av.open(str(self._path), "w")

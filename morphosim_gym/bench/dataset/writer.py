@@ -45,11 +45,10 @@ class EpisodeInput:
 
 
 class _ParquetFiles:
-    """Appends tables (one row group each) to `template`'s files, starting a new file past `max_mb`
-    (uncompressed bytes, as LeRobot counts)."""
+    """Appends tables (one row group each) to the files `path_of(chunk, file)`, starting a new file past
+    `max_mb` (uncompressed bytes, as LeRobot counts)."""
 
-    def __init__(self, layout: DatasetLayout, path_of: Callable[[int, int], Path], max_mb: float,
-                 chunks_size: int) -> None:
+    def __init__(self, path_of: Callable[[int, int], Path], max_mb: float, chunks_size: int) -> None:
         self._path_of, self.max_mb = path_of, max_mb
         self.cursor = FileCursor(chunks_size)
         self._writer: Any = None
@@ -176,7 +175,7 @@ class _Episodes:
     def __init__(self, layout: DatasetLayout, schema: FrameSchema, fps: int, video: VideoSettings,
                  data_file_mb: float, video_file_mb: float, chunks_size: int) -> None:
         self.schema, self.fps = schema, fps
-        self.data = _ParquetFiles(layout, layout.data, data_file_mb, chunks_size)
+        self.data = _ParquetFiles(layout.data, data_file_mb, chunks_size)
         self.videos = {key: VideoFileWriter(layout, key, fps, video, video_file_mb, chunks_size)
                        for key in schema.video_keys}
         self.tasks: dict[str, int] = {}
