@@ -277,3 +277,30 @@ def test_ray_backend_writes_the_same_dataset(collected, suite, tmp_path, cache_d
                              progress=False)
     assert (ray_result.ran, ray_result.failed) == (collected.ran, collected.failed)
     assert _files(ray_result.out) == _files(collected.out)
+
+
+def test_reads_as_lerobot_reads(collected):
+    """LeRobot's reading path (from its v3.0 code): tasks through pandas, frames through `datasets` with
+    the features' HF types, a frame's video time = from_timestamp + timestamp within 1e-4 s."""
+    pd = pytest.importorskip("pandas")
+    datasets = pytest.importorskip("datasets")
+    info = _info(collected.out)
+    tasks = pd.read_parquet(collected.out / "meta" / "tasks.parquet")
+    assert tasks.index.name == "task" and list(tasks.columns) == ["task_index"]
+    hf = {k: datasets.Value(f["dtype"]) if f["shape"] == [1] else
+          datasets.Sequence(length=f["shape"][0], feature=datasets.Value(f["dtype"]))
+          for k, f in info["features"].items() if f["dtype"] != "video"}
+    data = datasets.Dataset.from_parquet([str(p) for p in sorted((collected.out / "data").glob("*/*.parquet"))],
+                                         features=datasets.Features(hf))
+    eps = datasets.Dataset.from_parquet([str(p) for p in
+                                         sorted((collected.out / "meta" / "episodes").glob("*/*.parquet"))])
+    assert len(data) == info["total_frames"] and len(eps) == info["total_episodes"]
+    item = data[len(data) - 1]
+    ep = eps[item["episode_index"]]
+    assert isinstance(tasks.iloc[item["task_index"]].name, str)
+    key = "videos/observation.images.eye"
+    path = collected.out / info["video_path"].format(video_key="observation.images.eye",
+                                                     chunk_index=ep[f"{key}/chunk_index"],
+                                                     file_index=ep[f"{key}/file_index"])
+    _, times = read_frames(path, ep[f"{key}/from_timestamp"], ep[f"{key}/to_timestamp"])
+    assert np.min(np.abs(times - (ep[f"{key}/from_timestamp"] + item["timestamp"]))) <= 1e-4
