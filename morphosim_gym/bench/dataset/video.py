@@ -63,6 +63,8 @@ class VideoSettings:
             opts["svtav1-params"] = "lp=1"              # one thread: the same bytes on every machine
         else:
             opts.update(bf="0", threads="1")
+            if self.vcodec == "hevc":
+                opts["x265-params"] = "log-level=error"
             if self.preset is not None:
                 opts["preset"] = str(self.preset)
         return opts
