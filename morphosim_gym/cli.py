@@ -23,6 +23,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "morphosim_gym.language.cli",
     "morphosim_gym.viewer.cli",
     "morphosim_gym.bench.cli",
+    "morphosim_gym.bench.collect_cli",
     "morphosim_gym.warmup",
 )
 

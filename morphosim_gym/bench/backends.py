@@ -18,7 +18,7 @@ __all__ = ["BACKENDS", "run_backend", "Job"]
 
 BACKENDS = ("local", "ray")
 
-Job = tuple[EpisodeKey, int]          # an episode and how many frames to keep
+Job = tuple[EpisodeKey, int] | tuple[EpisodeKey, int, bool]   # an episode, frames to keep[, keep_steps]
 
 
 def _single_thread() -> None:

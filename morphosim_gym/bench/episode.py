@@ -1,9 +1,12 @@
-"""One benchmark episode: (suite, policy, perturbation, seed) -> a result record (+ frames).
+"""One benchmark episode: (suite, policy, perturbation, seed) -> a result record (+ frames, + steps).
 
 The record is a flat, JSON-serialisable dict. Everything in it except `wall_s` is a function
 of the episode's key, so two backends (or a rerun) produce identical records. Failures are
 results too: a perturbation that does not apply, a policy that raises or returns an invalid
 action, an env error: `status` is "failed", `error` has the text and `error_stage` says where.
+With `keep_steps=True` the result also carries every step (`EpisodeSteps`: the observation each
+action was chosen from, the action as applied, and what the step returned), which
+`morphosim collect` writes as training data.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from ..policies import policy_for_episode
 from .perturb import camera_option, resolve_edits, sample_episode, template_values
 from .suite import Suite
 
-__all__ = ["EpisodeKey", "EpisodeResult", "EpisodeRunner", "STAGES", "make_sim"]
+__all__ = ["EpisodeKey", "EpisodeResult", "EpisodeSteps", "EpisodeRunner", "STAGES", "make_sim"]
 
 STAGES = ("suite", "scene", "perturbation", "policy", "env")
 _SKIP_INFO = {"success", "step", "t", "scene_seed", "target_id", "edits", "edit_errors", "perturbations"}
@@ -43,11 +46,72 @@ class EpisodeKey:
 
 
 @dataclass
+class EpisodeSteps:
+    """Every step of an episode, T = steps taken: row t is the observation the t-th action was chosen
+    from, that action (clipped to the action space, as the env applied it) and what `step` returned.
+
+    Attributes:
+        observations: observation key -> [T, ...] (the env's dtypes).
+        actions: [T, A] float32.
+        rewards: [T] float32.
+        terminated, truncated, success: [T] bool (after the step).
+        instructions: T language instructions (`info["instruction"]` of each row's observation).
+    """
+
+    observations: dict[str, np.ndarray]
+    actions: np.ndarray
+    rewards: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    success: np.ndarray
+    instructions: list[str]
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+
+class _NoLog:
+    """Keeps no steps (an episode run without `keep_steps`)."""
+
+    def add(self, obs: dict, info: dict, action: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
+        pass
+
+    def result(self, reward: float, terminated: bool, truncated: bool, success: bool) -> None:
+        pass
+
+
+class _StepLog(_NoLog):
+    """Collects the rows of `EpisodeSteps` during an episode."""
+
+    def __init__(self) -> None:
+        self.obs: list[dict[str, np.ndarray]] = []
+        self.rows: list[tuple[np.ndarray, float, bool, bool, bool]] = []
+        self.instructions: list[str] = []
+
+    def add(self, obs: dict, info: dict, action: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
+        self.obs.append({k: np.array(v) for k, v in obs.items()})
+        self.instructions.append(str(info.get("instruction", "")))
+        self.rows.append((np.clip(action, low, high).astype(np.float32), 0.0, False, False, False))
+
+    def result(self, reward: float, terminated: bool, truncated: bool, success: bool) -> None:
+        a = self.rows[-1][0]
+        self.rows[-1] = (a, float(reward), bool(terminated), bool(truncated), bool(success))
+
+    def steps(self) -> EpisodeSteps:
+        keys = self.obs[0].keys() if self.obs else ()
+        cols = list(zip(*self.rows)) if self.rows else [[], [], [], [], []]
+        return EpisodeSteps({k: np.stack([o[k] for o in self.obs]) for k in keys},
+                            np.array(cols[0], np.float32), np.array(cols[1], np.float32), np.array(cols[2], bool),
+                            np.array(cols[3], bool), np.array(cols[4], bool), list(self.instructions))
+
+
+@dataclass
 class EpisodeResult:
-    """The record of an episode and, when asked for, its frames [F, H, W, 3] uint8."""
+    """The record of an episode and, when asked for, its frames [F, H, W, 3] uint8 and its steps."""
 
     record: dict
     frames: Optional[np.ndarray] = None
+    steps: Optional[EpisodeSteps] = None
 
 
 class _Failure(Exception):
@@ -104,8 +168,9 @@ class EpisodeRunner:
         self.sim.generate(ep.request.prompt, seed=ep.scene_seed)
         return ep.request.prompt
 
-    def run(self, key: EpisodeKey, frames: int = 0) -> EpisodeResult:
-        """Run one episode; never raises for episode-level failures (they are in the record)."""
+    def run(self, key: EpisodeKey, frames: int = 0, keep_steps: bool = False) -> EpisodeResult:
+        """Run one episode; never raises for episode-level failures (they are in the record).
+        `keep_steps=True` keeps every step (`EpisodeResult.steps`; None for a failed episode)."""
         start = time.perf_counter()
         record: dict[str, Any] = {"policy": key.policy, "perturbation": key.perturbation, "seed": key.seed,
                                   "status": "ok", "error": None, "error_stage": None, "prompt": None,
@@ -113,8 +178,9 @@ class EpisodeRunner:
                                   "success": None, "return": None, "steps": 0, "terminated": False, "perturbed": False,
                                   "metrics": {}}
         strip = None
+        log = _StepLog() if keep_steps else _NoLog()
         try:
-            strip = self._episode(key, frames, record)
+            strip = self._episode(key, frames, record, log)
         except _Failure as exc:
             record.update(status="failed", error=str(exc), error_stage=exc.stage)
         except Exception as exc:  # an env or library error: recorded, the sweep goes on
@@ -122,10 +188,11 @@ class EpisodeRunner:
             record.update(status="failed", error=f"{_text(exc)} (at {tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})",
                           error_stage="env")
         record["wall_s"] = round(time.perf_counter() - start, 4)
-        return EpisodeResult(record, strip)
+        steps = log.steps() if isinstance(log, _StepLog) and record["status"] == "ok" else None
+        return EpisodeResult(record, strip, steps)
 
     # ------------------------------------------------------------------ parts
-    def _episode(self, key: EpisodeKey, frames: int, record: dict) -> Optional[np.ndarray]:
+    def _episode(self, key: EpisodeKey, frames: int, record: dict, log: _NoLog) -> Optional[np.ndarray]:
         suite = self.suite
         pert = suite.perturbation(key.perturbation)
         if pert.error:
@@ -159,10 +226,10 @@ class EpisodeRunner:
             act = policy_for_episode(key.policy, env, key.seed)
         except Exception as exc:
             raise _Failure("policy", f"the policy factory raised {_text(exc)}") from None
-        return self._loop(env, act, obs, info, pert.at, edits, frames, record)
+        return self._loop(env, act, obs, info, pert.at, edits, frames, record, log)
 
     def _loop(self, env: LanguagePerturbation, act: Any, obs: Any, info: dict, at: int, edits: tuple[str, ...],
-              frames: int, record: dict) -> Optional[np.ndarray]:
+              frames: int, record: dict, log: _NoLog) -> Optional[np.ndarray]:
         u = env.unwrapped
         horizon = max(int(round(u.world.duration / u.dt)), 1)
         keep = sorted(set(np.round(np.linspace(0, horizon, frames)).astype(int).tolist())) if frames else []
@@ -175,6 +242,7 @@ class EpisodeRunner:
             except Exception as exc:
                 raise _Failure("policy", f"the policy raised {_text(exc)} at step {step}") from None
             a = _check_action(action, space.shape, step)
+            log.add(obs, info, a, space.low, space.high)
             step += 1
             try:
                 obs, reward, terminated, truncated, info = env.step(a)      # the wrapper applies the edits due
@@ -183,6 +251,7 @@ class EpisodeRunner:
                     raise
                 raise _Failure("perturbation", f"{_text(exc)} (before step {step})") from None
             total += float(reward)
+            log.result(reward, terminated, truncated, info["success"])
             if step in keep:
                 shots[step] = obs["rgb"].copy()
             if terminated or truncated:
