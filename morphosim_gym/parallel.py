@@ -12,8 +12,12 @@ edit) hangs if the parent ran one.
 `configure()` (run when this module is imported, first thing on `import morphosim_gym`) therefore
 
 * asks numba for its "forksafe" layer unless the user chose one (`NUMBA_THREADING_LAYER`):
-  "tbb" when installed, else "workqueue" (as fast as "omp" for our kernels);
-* makes forked children run torch on one thread (what torch's own DataLoader workers do).
+  "tbb" when installed (the `tbb` dependency; fork- and thread-safe, within ~4% of "omp" for
+  one env at one thread, and far faster than "omp" on oversubscribed cores, where GNU OpenMP
+  spins), else "workqueue" (fork-safe but not thread-safe; it hands every launch to a worker
+  thread, ~30% slower than "omp" for one env at one thread on a loaded 2-core machine);
+* makes forked children run torch on one thread (what torch's own DataLoader workers do), and
+  forks only between kernel launches (the child starts with `kernel_lock` free).
 
 "workqueue" is not thread-safe: two Python threads launching kernels at once terminate the
 process. `kernel_lock()` serialises launches while that layer (or a layer not yet chosen) is in
@@ -40,7 +44,17 @@ _layer: Optional[str] = None          # the layer numba launched, once known
 _configured = False
 
 
-def _torch_one_thread_in_child() -> None:
+def _before_fork() -> None:
+    _LOCK.acquire()
+
+
+def _after_fork_in_parent() -> None:
+    _LOCK.release()
+
+
+def _after_fork_in_child() -> None:
+    global _LOCK
+    _LOCK = threading.RLock()
     torch = sys.modules.get("torch")          # never import torch here: only fix it if it is in use
     if torch is not None:
         try:
@@ -64,7 +78,9 @@ def configure() -> None:
         if config is not None and config.THREADING_LAYER == "default":
             config.THREADING_LAYER = FORK_SAFE_REQUEST
     if hasattr(os, "register_at_fork"):
-        os.register_at_fork(after_in_child=_torch_one_thread_in_child)
+        # no fork in the middle of another thread's kernel; the child gets a fresh, free lock
+        os.register_at_fork(before=_before_fork, after_in_parent=_after_fork_in_parent,
+                            after_in_child=_after_fork_in_child)
 
 
 def threading_layer() -> Optional[str]:

@@ -76,17 +76,21 @@ def run_script(code: str, timeout: float = 240) -> subprocess.CompletedProcess:
 
 
 def test_envs_step_from_several_threads():
-    """workqueue terminates the process when two threads launch kernels at once; the envs and
-    `render` take turns (a viewer steps its env while its frame thread renders)."""
+    """workqueue terminates the process when two threads launch kernels at once; envs, `render`
+    and posing take turns (a viewer steps its env while its frame thread renders)."""
     out = run_script(f"""
         import threading
-        import gymnasium as gym, morphosim_gym as ms
+        import gymnasium as gym, numpy as np, morphosim_gym as ms
         from morphosim_gym.scene import Camera
+        from morphosim_gym.scene.motion import skin
         from tests.envs.conftest import FAST, PROMPT
         envs = [gym.make("{TRACK}", prompt=PROMPT, render_threads=2, **FAST) for _ in range(2)]
         for e in envs:
             e.reset(seed=0)
         scene = envs[0].unwrapped.scene
+        n = 20000                                      # enough Gaussians to skin in parallel
+        means, quats = np.random.rand(n, 3).astype(np.float32), np.tile(np.float32([1, 0, 0, 0]), (n, 1))
+        nodes, weights = np.zeros((n, 1), np.int32), np.ones((n, 1), np.float32)
         cam = Camera.look_at((0, -4, 2), (0, 0, 0.5), 32, 32)
         def steps(e):
             for _ in range(25):
@@ -94,7 +98,11 @@ def test_envs_step_from_several_threads():
         def renders():
             for _ in range(25):
                 ms.render(scene, cam, 0.0)
-        threads = [threading.Thread(target=steps, args=(e,)) for e in envs] + [threading.Thread(target=renders)]
+        def poses():
+            for i in range(25):
+                skin(means, quats, nodes, weights, np.tile([1.0, 0, 0, 0], (2, 1)), np.full((2, 3), 0.1 * i))
+        threads = [threading.Thread(target=steps, args=(e,)) for e in envs]
+        threads += [threading.Thread(target=renders), threading.Thread(target=poses)]
         for t in threads:
             t.start()
         for t in threads:
