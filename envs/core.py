@@ -4,8 +4,9 @@ This module is the lifecycle glue: reset chooses a scene, applies the reset edit
 task place the rig; step moves the rig, advances scene time, renders and hands the task camera's
 view to the task. The parts live beside it: arguments (`config.EnvConfig`), reset options
 (`options`), scene choice and pools (`scenes`), observations and actions (`spaces`),
-edits (`edits`), numba threads (`threads`). The registered envs (`TrackEnv`, `ReachEnv`,
-`FindEnv`) are subclasses that only fix the task kind and document it.
+edits (`edits`), numba threads (`threads`), episode snapshots (`snapshot`). The registered
+envs (`TrackEnv`, `ReachEnv`, `FindEnv`) are subclasses that only fix the task kind and
+document it.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from .config import RENDER_MODES, EnvConfig, env_signature, make_sim
 from .edits import apply_edit
 from .options import ResetOptions
 from .scenes import SceneChooser, SceneSource
+from .snapshot import EnvSnapshot, restore_snapshot, take_snapshot
 from .spaces import Observations, action_space, check_action, observed_cameras
 from .threads import numba_threads
 from .world import SceneWorld
@@ -156,6 +158,20 @@ class MorphoSimEnv(gym.Env):
             return False
         world.set_scene(new)
         return True
+
+    # ================================================================== branching
+    def snapshot(self) -> EnvSnapshot:
+        """The episode's state now, as an opaque, picklable `EnvSnapshot`: the world (the scene is
+        shared, not copied), the rig, the task's counters, the step count, the edit log and the
+        numpy RNG. `restore(snapshot)` returns to it, as often as wanted, to branch an episode.
+        Wrappers' own state (e.g. `LanguagePerturbation`'s schedule) is not included; to clone a
+        whole wrapped env use `copy.deepcopy(env)` or `pickle`."""
+        return take_snapshot(self)
+
+    def restore(self, snapshot: EnvSnapshot) -> None:
+        """Return to a `snapshot()` of this env (or of an env of the same class and arguments); the
+        next `step` continues exactly as it did after the snapshot was taken."""
+        restore_snapshot(self, snapshot)
 
     # ================================================================== step
     def step(self, action: Any) -> tuple[dict, float, bool, bool, dict]:

@@ -101,6 +101,21 @@ class TrackEnv(MorphoSimEnv):
     before the episode), `camera` (`position`, `look_at`, `fov_y_deg` of the tripod camera),
     `on_edit_error`. `env.unwrapped.perturb(text)` edits the scene mid-episode.
 
+    Branching an episode: `snap = env.unwrapped.snapshot()` saves the episode's state (world,
+    rig, task counters, edit log, numpy RNG; the immutable scene is shared, not copied, so it
+    costs well under a millisecond) and `env.unwrapped.restore(snap)` returns to it, as often
+    as wanted. Each branch continues exactly (observations, rewards, infos) like a fresh run of
+    the same actions and edits from step 0::
+
+        snap = env.unwrapped.snapshot()
+        env.unwrapped.perturb("make the ball blue")       # branch A: the counterfactual
+        a = [env.step(act) for act in actions]
+        env.unwrapped.restore(snap)                       # branch B: as it was
+        b = [env.step(act) for act in actions]
+
+    Snapshots pickle; whole envs (raw or from `gym.make`) `pickle` and `copy.deepcopy` too,
+    mid-episode, and the copy continues like the original.
+
     ## Version History
 
     - v0: initial version.

@@ -5,6 +5,7 @@ from any camera pose through a fast CPU splatting renderer, wrapped as Gymnasium
 environments. See the README for the tour.
 """
 
+from . import parallel as _parallel  # noqa: F401  first: asks numba for a fork-safe threading layer (see it)
 from .errors import BackendUnavailableError, CommandError, EditError
 from .language import Plan, parse
 from .pipeline import MorphoSim, SimConfig

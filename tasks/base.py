@@ -9,6 +9,7 @@ the env hands it the task camera and that camera's instance map (`TaskView`).
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Mapping
@@ -185,6 +186,16 @@ class Task:
         """Reward terms, success and termination after a step, from the view the env rendered after
         applying `action` (updates episode statistics)."""
         raise NotImplementedError
+
+    def get_state(self) -> dict[str, Any]:
+        """A copy of the task's episode state (its attributes; the spec and parameters, which an
+        episode never changes, are shared), for `set_state` to return to."""
+        shared = {"spec", "params"}
+        return copy.deepcopy({k: v for k, v in vars(self).items() if k not in shared})
+
+    def set_state(self, state: Mapping[str, Any]) -> None:
+        """Return to a `get_state` result of this task (the state stays usable for further calls)."""
+        vars(self).update(copy.deepcopy(dict(state)))
 
     def reset_metrics(self) -> dict[str, Any]:
         """Episode statistics as they stand at reset (merged into the reset info after `measure`);

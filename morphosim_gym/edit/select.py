@@ -130,6 +130,15 @@ class Selector:
             self._cache.clear()
             self._owners.clear()
 
+    # ------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict:
+        """The settings without the lock and the cache (keyed by array ids of this process)."""
+        return {k: v for k, v in vars(self).items() if k not in ("_lock", "_cache", "_owners")}
+
+    def __setstate__(self, state: dict) -> None:
+        vars(self).update(state)
+        self._cache, self._owners, self._lock = {}, {}, threading.Lock()
+
     # ------------------------------------------------------------ internals
     def _key(self, scene: Scene4D, ids: tuple[int, ...], query: str) -> tuple:
         """Selections depend on the geometry, ids and features, not on colours: key on the identity of

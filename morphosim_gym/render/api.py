@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import BackendUnavailableError
 from ..limits import check_render_size
+from ..parallel import serialised
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
@@ -49,6 +50,7 @@ class RenderOutput:
 Source = Union[Scene4D, Gaussians, Sequence[Union[Scene4D, Gaussians]]]
 
 
+@serialised                 # one kernel launch at a time under numba's workqueue layer
 def render(
     source: Source,
     camera: Union[Camera, Sequence[Camera]],
@@ -163,6 +165,7 @@ def _render_numpy(g: Gaussians, viewmats, Ks, nears, width, height, bg, features
     return {k: (None if v is None else v.cpu().numpy()) for k, v in out.items()}
 
 
+@serialised
 def rasterize(
     means,        # [N, 3]
     quats,        # [N, 4]

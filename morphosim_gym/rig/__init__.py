@@ -9,9 +9,9 @@
 MJCF files ship in this package: `pan_tilt.xml`, `free_camera.xml`, `arm6.xml`.
 """
 
-from .base import AGENT_OBJECT_ID, RIG_DIR, Rig, yaw_quat
+from .base import AGENT_OBJECT_ID, POSED_MODEL_FIELDS, RIG_DIR, Rig, RigState, yaw_quat
 from .rigs import RIGS, ArmRig, FreeCameraRig, PanTiltRig
 from .skin import AgentSkin, geom_part
 
-__all__ = ["Rig", "PanTiltRig", "FreeCameraRig", "ArmRig", "RIGS", "AgentSkin", "geom_part", "AGENT_OBJECT_ID",
-           "RIG_DIR", "yaw_quat"]
+__all__ = ["Rig", "RigState", "POSED_MODEL_FIELDS", "PanTiltRig", "FreeCameraRig", "ArmRig", "RIGS", "AgentSkin",
+           "geom_part", "AGENT_OBJECT_ID", "RIG_DIR", "yaw_quat"]

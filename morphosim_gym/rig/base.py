@@ -12,7 +12,9 @@ every body, geom, site and camera offset and every geom size by `s`.
 
 from __future__ import annotations
 
+import copy
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -21,10 +23,14 @@ import numpy as np
 from ..scene.camera import MUJOCO_TO_OPENCV, Camera
 from ..scene.gaussians import Gaussians
 
-__all__ = ["Rig", "RIG_DIR", "yaw_quat", "AGENT_OBJECT_ID", "mujoco_camera"]
+__all__ = ["Rig", "RigState", "RIG_DIR", "yaw_quat", "AGENT_OBJECT_ID", "mujoco_camera", "POSED_MODEL_FIELDS"]
 
 RIG_DIR = Path(__file__).resolve().parent
 AGENT_OBJECT_ID = 100          # instance id the agent's own Gaussians render with
+POSED_MODEL_FIELDS = ("body_pos", "body_ipos", "body_quat", "geom_pos", "geom_size", "site_pos", "site_size",
+                      "cam_pos", "cam_quat", "cam_fovy")
+"""The `MjModel` arrays a rig changes after construction (placement, scale, zoom, world cameras)."""
+_SHARED_ATTRS = frozenset({"model", "data", "_skin", "_nominal"})   # not part of a rig's episode state
 
 
 def _mujoco() -> Any:
@@ -58,6 +64,16 @@ def mujoco_camera(cam_xpos: np.ndarray, cam_xmat: np.ndarray, fovy: float, width
     return cam
 
 
+@dataclass(frozen=True)
+class RigState:
+    """A rig's episode state (`Rig.get_state`): the posed model arrays, the joint positions and
+    the rig's own attributes. Opaque; only `Rig.set_state` of the same rig class reads it."""
+
+    model: dict[str, np.ndarray]
+    qpos: np.ndarray
+    attrs: dict[str, Any]
+
+
 class Rig:
     """A kinematic MuJoCo model loaded from an MJCF file of the package (or any path).
 
@@ -82,7 +98,6 @@ class Rig:
             raise ValueError(f"Expected an MJCF file, found no file at {str(path)!r}")
         self.model = mujoco.MjModel.from_xml_path(str(path))
         self.data = mujoco.MjData(self.model)
-        self._mj = mujoco
         self._nominal = {k: getattr(self.model, k).copy()
                          for k in ("body_pos", "body_ipos", "geom_pos", "geom_size", "site_pos", "site_size", "cam_pos")}
         self._root = self._id("body", self.root_body) if self.root_body else 1
@@ -96,6 +111,33 @@ class Rig:
         self.joint_names = tuple(self.model.joint(j).name for j in hinges)
         self._qadr = np.array([int(self.model.jnt_qposadr[j]) for j in hinges], dtype=np.int64)
         self.joint_range = np.array([self.model.jnt_range[j] for j in hinges], dtype=np.float64).reshape(-1, 2)
+        self.forward()
+
+    @property
+    def _mj(self) -> Any:
+        """The mujoco module (looked up, not stored: a module does not pickle)."""
+        return _mujoco()
+
+    # ------------------------------------------------------------ state
+    def get_state(self) -> RigState:
+        """A copy of everything an episode changes: the posed model arrays (`POSED_MODEL_FIELDS`),
+        `qpos` and the rig's attributes (last action, zoom limits...). The compiled model, the
+        MuJoCo data buffers and the skin are not copied."""
+        m = self.model
+        attrs = copy.deepcopy({k: v for k, v in vars(self).items() if k not in _SHARED_ATTRS})
+        return RigState({f: getattr(m, f).copy() for f in POSED_MODEL_FIELDS}, self.data.qpos.copy(), attrs)
+
+    def set_state(self, state: RigState) -> None:
+        """Return to a `get_state` result (of this rig's class) and recompute the kinematics."""
+        if not isinstance(state, RigState):
+            raise TypeError(f"Expected a RigState from Rig.get_state(), found {type(state).__name__}")
+        if state.qpos.shape != self.data.qpos.shape:
+            raise ValueError(f"Expected a RigState of a {type(self).__name__} (qpos [{self.data.qpos.size}]), "
+                             f"found qpos [{state.qpos.size}]")
+        for f, value in state.model.items():
+            getattr(self.model, f)[...] = value
+        self.data.qpos[:] = state.qpos
+        vars(self).update(copy.deepcopy(state.attrs))
         self.forward()
 
     # ------------------------------------------------------------ lookups

@@ -14,6 +14,7 @@ from typing import Any
 import numba
 import numpy as np
 
+from ..parallel import kernel_lock
 from .rotations import quat_normalize, quat_slerp, quat_to_matrix
 
 __all__ = ["Motion", "skin"]
@@ -156,7 +157,8 @@ def skin(means: np.ndarray, quats: np.ndarray, skin_nodes: np.ndarray, skin_weig
     if means.shape[0] <= _SKIN_CHUNK:
         _skin_range(0, means.shape[0], *args)     # one chunk: skip the parallel launch
     else:
-        _skin_kernel(*args)
+        with kernel_lock():                       # one launch at a time under numba's workqueue layer
+            _skin_kernel(*args)
     return out_m, out_q
 
 
