@@ -63,6 +63,32 @@ def _after_fork_in_child() -> None:
             pass
 
 
+_TBB_SONAMES = ("libtbb.so.12",)
+
+
+def _preload_tbb() -> Optional[str]:
+    """Load the `tbb` wheel's library so numba's TBB layer can link to it.
+
+    pip installs `libtbb.so.12` into `<prefix>/lib`, which a virtual environment does not put on
+    the dynamic loader's path, so numba reports TBB unavailable ("Unknown import problem") and
+    falls back to workqueue. Loading it once with RTLD_GLOBAL lets numba's `tbbpool` resolve it.
+    Returns the path loaded, or None (not Linux, no wheel, or already loadable)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    import ctypes
+
+    for prefix in dict.fromkeys((sys.prefix, sys.base_prefix)):
+        for name in _TBB_SONAMES:
+            path = os.path.join(prefix, "lib", name)
+            if os.path.exists(path):
+                try:
+                    ctypes.CDLL(path, mode=ctypes.RTLD_GLOBAL)
+                except OSError:  # pragma: no cover - a broken wheel: numba falls back to workqueue
+                    continue
+                return path
+    return None
+
+
 def configure() -> None:
     """Request a fork-safe numba threading layer (unless the user chose one) and make forked
     children run torch single-threaded. Idempotent; has no effect on a layer already launched."""
@@ -70,6 +96,8 @@ def configure() -> None:
     if _configured:
         return
     _configured = True
+    if os.environ.get("NUMBA_THREADING_LAYER", "") in ("", FORK_SAFE_REQUEST, "safe", "tbb"):
+        _preload_tbb()
     if not os.environ.get("NUMBA_THREADING_LAYER"):
         # numba re-reads its settings when the environment changes, so the request goes there
         # (children inherit it); the config attribute covers a numba imported before us.

@@ -47,6 +47,17 @@ def test_numba_uses_a_fork_safe_threading_layer(parent_obs):
     assert numba.threading_layer() in ("tbb", "workqueue")
 
 
+def test_the_tbb_wheel_is_used_when_installed(parent_obs):
+    """pip's `tbb` puts libtbb.so.12 in <venv>/lib, off the loader's path; `parallel` preloads it,
+    so numba runs TBB (thread- and fork-safe, as fast as OpenMP) rather than falling back."""
+    import os
+    import sys
+
+    if not any(os.path.exists(os.path.join(p, "lib", "libtbb.so.12")) for p in (sys.prefix, sys.base_prefix)):
+        pytest.skip("the tbb wheel is not installed (numba falls back to workqueue)")
+    assert numba.threading_layer() == "tbb"
+
+
 def test_sync_vector_env(parent_obs):
     check(gym.make_vec(TRACK, 2, vectorization_mode="sync", **KW), parent_obs)
 
