@@ -110,7 +110,7 @@ View = tuple   # (source, camera) or (source, camera, background)
 
 
 def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
-                 features: bool = False) -> list[RenderOutput]:
+                 features: bool = False, cull: bool = False) -> list[RenderOutput]:
     """Render several views, each its own source, camera and background, in one batched pass.
 
     Args:
@@ -123,6 +123,11 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
             (one CUDA launch per resolution; `BackendUnavailableError` without gsplat and CUDA)
             or "torch" (the reference, view by view).
         features: also render the feature maps (every view's Gaussians need features of one D).
+        cull: on "cpu", skip runs of one object's Gaussians whose bounding sphere is outside the
+            view before projecting them (images identical either way; a speed switch, off by
+            default: the projection already culls off-screen Gaussians for ~5 ns each, so on
+            200k-Gaussian scenes at 128 px it saved at most a few percent, and cost about as
+            much when nothing could be dropped).
 
     Returns:
         One `RenderOutput` per view (numpy, no leading camera axis), each exactly what
@@ -152,7 +157,7 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
         from .cpu.batch import batch_view, rasterize_batch_numpy
 
         outs = rasterize_batch_numpy([batch_view(parts, cam.world_to_camera, cam.K, cam.near, cam.width, cam.height,
-                                                 bg) for parts, cam, bg in resolved], features=features)
+                                                 bg) for parts, cam, bg in resolved], features=features, cull=cull)
     return [RenderOutput(**{k: o.get(k) for k in _OUTPUT_KEYS}) for o in outs]
 
 

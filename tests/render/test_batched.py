@@ -111,3 +111,40 @@ def test_batch_bad_backend_and_missing_features():
 def test_gsplat_batch_unavailable_is_a_clear_error():
     with pytest.raises(ms.BackendUnavailableError, match="gsplat"):
         render_batch(_views(_SPECS[:2]), backend="gsplat")
+
+
+def _clusters(seed: int, centres, n_each: int = 400, spread: float = 0.15) -> ms.Gaussians:
+    """Objects as contiguous clusters of Gaussians (object id = cluster index) around `centres`."""
+    rng = np.random.default_rng(seed)
+    k = len(centres)
+    means = (np.repeat(np.asarray(centres, np.float32), n_each, axis=0)
+             + rng.normal(size=(k * n_each, 3)).astype(np.float32) * spread)
+    return ms.Gaussians(means=means, quats=rng.normal(size=(k * n_each, 4)).astype(np.float32),
+                        scales=np.exp(rng.uniform(-5.0, -2.5, size=(k * n_each, 3))).astype(np.float32),
+                        opacities=rng.uniform(0.05, 1.0, size=k * n_each).astype(np.float32),
+                        colors=rng.uniform(0, 1, size=(k * n_each, 3)).astype(np.float32),
+                        object_ids=np.repeat(np.arange(k), n_each).astype(np.int32))
+
+
+def test_object_culling_is_exact_and_drops_objects_outside_the_view():
+    from morphosim_gym.render.cpu import batch
+
+    # around the camera's view: in front, just off each edge (so footprints reach in), far off
+    # each side, behind the camera, and straddling the near plane
+    centres = [(0, 0, 0), (1.9, 0, 0), (-1.9, 0, 0.2), (0, 0, 1.6), (6, 0, 0), (-6, 1, 0), (0, 0, 7),
+               (0, 0, -6), (0, -6, 1.5), (0, -3.0, 1.5), (0.5, 1.0, -0.3)]
+    g = _clusters(0, centres)
+    cams = cameras(48, 40, 4) + [cameras(96, 96, 1)[0].orbit(40, center=(0, 0, 0))]
+    views = [(g, cam, (0.3, 0.2, 0.1)) for cam in cams]
+    culled = render_batch(views, cull=True)
+    plain = render_batch(views)
+    for (src, cam, bg), a, b in zip(views, culled, plain):
+        _assert_same(a, b)
+        _assert_same(a, ms.render(src, cam, background=bg))
+    bv = [batch.batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height) for c in cams]
+    f32 = np.float32
+    kept = batch._kept_ranges(np.array([0, len(g)]), np.ascontiguousarray(g.means, f32), g.scales, g.opacities,
+                              g.object_ids, np.stack([v.viewmat for v in bv])[:1], np.stack([v.K for v in bv])[:1],
+                              np.array([[48, 40, 3]]), np.array([cams[0].near], f32), True)
+    n_kept = int((kept[0][:, 1] - kept[0][:, 0]).sum())
+    assert 0 < n_kept <= len(g) - 4 * 400      # the 4 objects wholly outside the first view are dropped

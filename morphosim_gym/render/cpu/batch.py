@@ -10,6 +10,8 @@ own output block.
 
 * projection and list filling run as `prange` over work items (v, lo, hi): about four equal
   slices of the total per thread, never crossing a view, each with its own tile counts;
+* with `cull=True`, object-level culling (`cull.cull_view`) first drops runs of one object's
+  Gaussians whose bounding sphere is outside the view's frustum, so they get no work item;
 * offsets are a serial prefix sum over views, tiles and items (each view's list segment starts
   where the previous view's ends, and within a tile items follow in index order, which keeps
   each tile list in ascending index order as the single path does);
@@ -29,6 +31,7 @@ from numba import prange
 
 from ._jit import NREC, jit, pjit
 from .binning import _fill_range, plan_tiles
+from .cull import cull_view
 from .forward import _raster_tiles
 from .pipeline import Workspace
 from .projection import _project_range
@@ -141,19 +144,34 @@ def _raster_items(claims, order, tstart, tile_start, lst_base, lst, rec, ids, fe
                       rgb, depth, alpha, inst, feat_out, tfinal, last, keys[k], keys2[k], idx[k], idx2[k])
 
 
-def _work_items(goff: np.ndarray, nthr: int) -> tuple[np.ndarray, np.ndarray]:
-    """(items [n, 3] of (view, lo, hi), item_start [V + 1]): each view cut into slices of about
-    total / (4 * threads) Gaussians (at least `_MIN_ITEM`)."""
-    total = int(goff[-1])
+def _work_items(goff: np.ndarray, nthr: int, kept: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(items [n, 3] of (view, lo, hi), item_start [V + 1]): each view's kept ranges cut into
+    slices of about total / (4 * threads) Gaussians (at least `_MIN_ITEM`)."""
+    total = sum(int((r[:, 1] - r[:, 0]).sum()) for r in kept)
     step = max(_MIN_ITEM, -(-total // max(1, nthr * _ITEMS_PER_THREAD)))
     rows, starts = [], [0]
-    for v in range(len(goff) - 1):
-        lo, hi = int(goff[v]), int(goff[v + 1])
-        for b in range(lo, hi, step):
-            rows.append((v, b, min(b + step, hi)))
+    for v, ranges in enumerate(kept):
+        for lo, hi in ranges.tolist():
+            for b in range(lo, hi, step):
+                rows.append((v, b, min(b + step, hi)))
         starts.append(len(rows))
     items = np.array(rows, np.int64).reshape(-1, 3)
     return items, np.array(starts, np.int64)
+
+
+def _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cull: bool) -> list[np.ndarray]:
+    """Per view, the [k, 2] index ranges left after object-level culling (`cull.cull_view`)."""
+    out = []
+    for v in range(len(goff) - 1):
+        lo, hi = int(goff[v]), int(goff[v + 1])
+        if not cull or hi == lo:
+            out.append(np.array([[lo, hi]] if hi > lo else [], np.int64).reshape(-1, 2))
+            continue
+        keep = np.empty((hi - lo, 2), np.int64)      # at most one range per Gaussian
+        k = cull_view(means, scales, opac, ids, lo, hi, viewmats[v].astype(np.float64), Ks[v].astype(np.float64),
+                      int(sizes[v, 0]), int(sizes[v, 1]), float(nears[v]), keep)
+        out.append(keep[:k])
+    return out
 
 
 _LOCAL = threading.local()
@@ -170,16 +188,18 @@ def _concat(views: Sequence[BatchView], name: str, width: int, dtype) -> np.ndar
     parts = [x for v in views for x in getattr(v, name)]
     if not parts:
         return np.empty((0, width), dtype) if width else np.empty(0, dtype)
-    return np.ascontiguousarray(np.concatenate(parts), dtype=dtype)
+    return np.ascontiguousarray(parts[0] if len(parts) == 1 else np.concatenate(parts), dtype=dtype)
 
 
-def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False) -> list[dict]:
+def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cull: bool = False) -> list[dict]:
     """Forward-only float32 splatting of several views in one pass (see the module docstring).
 
     Args:
         views: the views (`BatchView`: float32 C-contiguous arrays as `rasterize_numpy` takes
             them for one camera; `ids` int32; `features` [N, D] or None).
         features: also render the D feature channels (every view must have the same D).
+        cull: skip runs of Gaussians outside a view's frustum before projecting them
+            (`cull.cull_view`; the images are identical either way).
 
     Returns:
         One dict per view, as `rasterize_numpy` returns for one camera without the camera axis:
@@ -222,7 +242,8 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False) ->
     bgs = np.ascontiguousarray(np.stack([v.background for v in views]), f32)
 
     ws = _workspace()
-    items, item_start = _work_items(goff, nthr)
+    kept = _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cull)
+    items, item_start = _work_items(goff, nthr, kept)
     max_tiles = max(int(ntiles.max()), 1)
     rec = ws.get("rec", (n, NREC), f32)
     trect = ws.get("trect", (4, n), np.int32)
