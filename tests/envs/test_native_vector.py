@@ -155,3 +155,16 @@ def test_language_perturbation_per_env_matches_the_wrapped_single_env():
     assert vinfo["perturbations"][0] == ((2, "make the ball blue", True),)
     assert not vinfo["_perturbations"][1]
     venv.close()
+
+
+def test_registered_task_ids_get_the_native_vector_env():
+    from morphosim_gym.envs import register_task
+
+    env_id = register_task("find", env_id="MorphoSim/FindNativeVectorTest-v0")
+    venv = gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **FAST)
+    assert isinstance(venv, MorphoSimVectorEnv)
+    obs, info = venv.reset(seed=0)
+    single = make(env_id)
+    ref, ref_info = single.reset(seed=1)
+    assert np.array_equal(obs["rgb"][1], ref["rgb"]) and info["target"][1] == ref_info["target"]
+    venv.close()
