@@ -39,7 +39,12 @@ def _assert_same(batched, single, features: bool = False) -> None:
 
 
 @pytest.mark.parametrize("count", [1, 3, 8])
-def test_batch_is_bit_identical_to_single_renders(count):
+@pytest.mark.parametrize("parallel_projection", [False, True])
+def test_batch_is_bit_identical_to_single_renders(count, parallel_projection, monkeypatch):
+    from morphosim_gym.render.cpu import batch
+
+    if parallel_projection:        # small batches project on the calling thread; force the prange path
+        monkeypatch.setattr(batch, "SERIAL_BELOW", 0)
     views = _views(_SPECS[:count])
     outs = render_batch(views)
     assert len(outs) == count

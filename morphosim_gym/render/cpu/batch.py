@@ -42,6 +42,10 @@ _KEY_DTYPE = np.uint32
 _MAX_TILE_LIST = 1 << 24
 _ITEMS_PER_THREAD = 4
 _MIN_ITEM = 1024
+SERIAL_BELOW = 1 << 16
+"""Batches of fewer Gaussians project and bin on the calling thread (a few hundred microseconds
+at most) and run only the raster as a parallel region: every parallel region ends in a join that
+waits for the slowest thread, which costs milliseconds when the cores are shared."""
 
 
 class BatchView:
@@ -82,6 +86,16 @@ def _project_items(items,      # [n_items, 3] int64: view, lo, hi (global Gaussi
 
 
 @jit
+def _project_items_serial(items, means, quats, scales, opacities, colors, feat, viewmats, Ks, sizes, nears, rec, trect,
+                          counts):
+    """`_project_items` on the calling thread (small batches: no parallel region to join)."""
+    for k in range(items.shape[0]):
+        v = items[k, 0]
+        _project_range(items[k, 1], items[k, 2], means, quats, scales, opacities, colors, feat, viewmats[v], Ks[v],
+                       sizes[v, 0], sizes[v, 1], nears[v], rec, trect, sizes[v, 2], counts[k])
+
+
+@jit
 def _offsets(items,        # [n_items, 3] int64 (items of a view contiguous, in index order)
              item_start,   # [V + 1] int64: items of view v are item_start[v]:item_start[v + 1]
              ntiles,       # [V] int64
@@ -111,6 +125,13 @@ def _offsets(items,        # [n_items, 3] int64 (items of a view contiguous, in 
 @pjit
 def _fill_items(items, sizes, trect, item_off, lst):
     for k in prange(items.shape[0]):
+        _fill_range(items[k, 1], items[k, 2], trect, sizes[items[k, 0], 2], item_off[k], lst)
+
+
+@jit
+def _fill_items_serial(items, sizes, trect, item_off, lst):
+    """`_fill_items` on the calling thread."""
+    for k in range(items.shape[0]):
         _fill_range(items[k, 1], items[k, 2], trect, sizes[items[k, 0], 2], item_off[k], lst)
 
 
@@ -248,9 +269,10 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     rec = ws.get("rec", (n, NREC), f32)
     trect = ws.get("trect", (4, n), np.int32)
     counts = ws.get("counts", (max(len(items), 1), max_tiles), np.int32)
+    serial = n < SERIAL_BELOW or nthr == 1
     if len(items):
-        _project_items(items, means, quats, scales, opac, colors, feat, viewmats, Ks, sizes, nears, rec, trect,
-                       counts)
+        project = _project_items_serial if serial else _project_items
+        project(items, means, quats, scales, opac, colors, feat, viewmats, Ks, sizes, nears, rec, trect, counts)
     tile_start = ws.get("tile_start", (int(tstart[-1]),), np.int64)
     item_off = ws.get("item_off", (max(len(items), 1), max_tiles), np.int64)
     lst_base = ws.get("lst_base", (V + 1,), np.int64)
@@ -263,7 +285,7 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
                          f"found {longest} (list positions are kept as floats)")
     lst = ws.get("lst", (int(total),), np.int32)
     if len(items):
-        _fill_items(items, sizes, trect, item_off, lst)
+        (_fill_items_serial if serial else _fill_items)(items, sizes, trect, item_off, lst)
     m = max(longest, 1)
     keys = ws.get("keys", (nthr, m), _KEY_DTYPE)
     keys2 = ws.get("keys2", (nthr, m), _KEY_DTYPE)
