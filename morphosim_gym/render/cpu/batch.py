@@ -8,8 +8,9 @@ together. The Gaussians of all views are concatenated into one set of arrays; vi
 index range goff[v]:goff[v + 1], its own tile grid, its own segment of the tile lists and its
 own output block.
 
-* projection and list filling run as `prange` over work items (v, lo, hi): about four equal
-  slices of the total per thread, never crossing a view, each with its own tile counts;
+* projection and list filling run over work items (v, lo, hi): about four equal slices of the
+  total per thread, never crossing a view, each with its own tile counts; as a `prange` from
+  `SERIAL_BELOW` Gaussians on, on the calling thread below that;
 * with `cull=True`, object-level culling (`cull.cull_view`) first drops runs of one object's
   Gaussians whose bounding sphere is outside the view's frustum, so they get no work item;
 * offsets are a serial prefix sum over views, tiles and items (each view's list segment starts
