@@ -13,9 +13,16 @@ for Reach/Find when they succeed). Modes:
   single-fresh     one env without a pool: every reset composes a new scene (~30-60 ms)
   sync-8           SyncVectorEnv of 8 envs in one process
   async-8          AsyncVectorEnv of 8 envs, one process each (spawn)
+  vector-8         the native MorphoSimVectorEnv of 8 envs: one process, one batched render of
+                   all 8 cameras per step on all cores
+  vector-8-1thread the same with its batched render on one numba thread
+  vector-32        the same with 32 envs
 
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
-observation) by calling them directly.
+observation) by calling them directly. `--ratios` measures single, vector-8 and sync-8
+alternately in one run (A B C A B C ...) and reports per-round ratios (median) and the
+vector-8 cost split (batched render, skinning, the rest: Python) for each id; on a shared
+machine only these same-run ratios mean much.
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ import morphosim_gym as ms
 from morphosim_gym.envs import ENV_IDS, make_vec
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8")
+MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8", "vector-8", "vector-8-1thread", "vector-32")
 
 
 def _single(env_id: str, steps: int, **kw) -> float:
@@ -83,7 +90,94 @@ def measure(env_id: str, mode: str, steps: int) -> float:
         return _vector(env_id, max(1, steps // 8), "sync", scene_pool=8)
     if mode == "async-8":
         return _vector(env_id, max(1, steps // 8), "async", scene_pool=8)
+    if mode in ("vector-8", "vector-32"):
+        n = int(mode.split("-")[1])
+        return _vector(env_id, max(1, steps // n), "vector", n=n, scene_pool=8)
+    if mode == "vector-8-1thread":
+        return _vector(env_id, max(1, steps // 8), "vector", render_threads=1, scene_pool=8)
     raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
+
+
+class _Split:
+    """Wall time inside the batched render and inside skinning (scene and agent Gaussians) of a
+    native vector env, by wrapping those calls."""
+
+    def __init__(self) -> None:
+        self.render = self.skinning = 0.0
+
+    def install(self) -> list:
+        from morphosim_gym.envs import native_vector
+        from morphosim_gym.envs.world import SceneWorld
+        from morphosim_gym.rig.base import Rig
+
+        undo = []
+
+        def wrap(owner, name, field):
+            orig = getattr(owner, name)
+
+            def timed(*a, **k):
+                t0 = time.perf_counter()
+                try:
+                    return orig(*a, **k)
+                finally:
+                    setattr(self, field, getattr(self, field) + time.perf_counter() - t0)
+
+            setattr(owner, name, timed)
+            undo.append((owner, name, orig))
+
+        wrap(native_vector, "render_batch", "render")
+        wrap(SceneWorld, "gaussians", "skinning")
+        wrap(Rig, "gaussians", "skinning")
+        return undo
+
+
+def vector_split(env_id: str, steps: int, n: int = 8, render_threads=None) -> dict:
+    """Per env-step microseconds of a native vector env of n envs: batched render, skinning, rest."""
+    split = _Split()
+    venv = make_vec(env_id, n, vectorization_mode="vector", scene_pool=8, render_threads=render_threads)
+    venv.reset(seed=0)
+    rng = np.random.default_rng(0)
+    shape = venv.action_space.shape
+    for _ in range(10):
+        venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
+    undo = split.install()
+    try:
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
+        total = time.perf_counter() - t0
+    finally:
+        for owner, name, orig in undo:
+            setattr(owner, name, orig)
+    venv.close()
+    per = 1e6 / (steps * n)
+    return {"total_us": round(total * per, 1), "render_us": round(split.render * per, 1),
+            "skinning_us": round(split.skinning * per, 1),
+            "python_us": round((total - split.render - split.skinning) * per, 1)}
+
+
+def ratios(env_id: str, steps: int, rounds: int) -> dict:
+    """single, vector-8 and sync-8 measured alternately; per-round ratios and their medians."""
+    runs: dict[str, list[float]] = {"single": [], "vector-8": [], "sync-8": [], "vector-8-1thread": []}
+    for _ in range(rounds):
+        for mode in runs:
+            runs[mode].append(measure(env_id, mode, steps))
+    vs_single = [v / s for v, s in zip(runs["vector-8"], runs["single"])]
+    vs_sync = [v / s for v, s in zip(runs["vector-8"], runs["sync-8"])]
+    one_single = [v / s for v, s in zip(runs["vector-8-1thread"], runs["single"])]
+    one_sync = [v / s for v, s in zip(runs["vector-8-1thread"], runs["sync-8"])]
+    splits = [vector_split(env_id, max(1, steps // 8)) for _ in range(rounds)]
+    split = {k: round(statistics.median(s[k] for s in splits), 1) for k in splits[0]}
+    splits1 = [vector_split(env_id, max(1, steps // 8), render_threads=1) for _ in range(rounds)]
+    split1 = {k: round(statistics.median(s[k] for s in splits1), 1) for k in splits1[0]}
+    return {"id": env_id, "runs": {k: [round(x, 1) for x in v] for k, v in runs.items()},
+            "vector8_over_single": round(statistics.median(vs_single), 2),
+            "vector8_over_sync8": round(statistics.median(vs_sync), 2),
+            "round_ratios_single": [round(x, 2) for x in vs_single],
+            "round_ratios_sync8": [round(x, 2) for x in vs_sync],
+            "vector8_1thread_over_single": round(statistics.median(one_single), 2),
+            "vector8_1thread_over_sync8": round(statistics.median(one_sync), 2),
+            "vector8_split_us_per_env_step": split, "vector8_1thread_split_us_per_env_step": split1}
 
 
 def breakdown(repeats: int = 300) -> dict:
@@ -132,9 +226,12 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=800, help="env steps per run (vector: total over all envs)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--breakdown", action="store_true")
+    ap.add_argument("--ratios", action="store_true", help="only the same-run ratios (single / vector-8 / sync-8)")
     ap.add_argument("--json", type=Path, default=RESULTS / "envs.json")
     args = ap.parse_args()
 
+    if args.ratios:
+        return _main_ratios(args)
     rows = []
     for env_id in args.ids:
         for mode in args.modes:
@@ -159,6 +256,32 @@ def main() -> None:
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(result, indent=2) + "\n")
     print(f"\nwrote {args.json}")
+
+
+def _main_ratios(args) -> None:
+    out = []
+    for env_id in args.ids:
+        r = ratios(env_id, args.steps, args.repeats)
+        out.append(r)
+        print(f"{env_id:22s} vector-8/single {r['vector8_over_single']:.2f}  vector-8/sync-8 "
+              f"{r['vector8_over_sync8']:.2f}  (1 thread: {r['vector8_1thread_over_single']:.2f}, "
+              f"{r['vector8_1thread_over_sync8']:.2f})  runs {r['runs']}  split {r['vector8_split_us_per_env_step']}"
+              f"  split 1 thread {r['vector8_1thread_split_us_per_env_step']}", flush=True)
+    print("\n| id | threads | vector-8 / single | vector-8 / sync-8 | vector-8 us per env-step: total / render / "
+          "skinning / Python |\n|---|---|---|---|---|")
+    for r in out:
+        for label, suffix in (("all", ""), ("1", "_1thread")):
+            s = r[f"vector8{suffix}_split_us_per_env_step"]
+            print(f"| {r['id']} | {label} | {r[f'vector8{suffix}_over_single']:.2f} | "
+                  f"{r[f'vector8{suffix}_over_sync8']:.2f} | "
+                  f"{s['total_us']} / {s['render_us']} / {s['skinning_us']} / {s['python_us']} |")
+    path = args.json if args.json != RESULTS / "envs.json" else RESULTS / "envs_ratios.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"ratios": out, "steps_per_run": args.steps, "rounds": args.repeats,
+                                "machine": {"cpus": os.cpu_count(),
+                                            "loadavg_at_end": [round(x, 2) for x in os.getloadavg()]}},
+                               indent=2) + "\n")
+    print(f"\nwrote {path}")
 
 
 if __name__ == "__main__":

@@ -11,7 +11,9 @@
     obs, info = env.reset(seed=0, options={"edits": ["make the ball blue"]})
 
 `ENTRY_POINTS` (task kind -> env class) is the one table behind the ids, `register_task` and
-the benchmark's suites. Every env takes the keyword arguments of `EnvConfig`. Registration
+the benchmark's suites; every id's `vector_entry_point` (`vector_entry_of`) is the native
+`MorphoSimVectorEnv`, which steps N worlds in one process and renders all their cameras in one
+batched call. Every env takes the keyword arguments of `EnvConfig`. Registration
 uses string entry points, so importing this package compiles no MuJoCo model and generates
 no scene. The env classes, wrappers and the vector helper are imported lazily on first
 attribute access.
@@ -23,8 +25,8 @@ from typing import Any
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "ENTRY_POINTS", "env_id_of", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv", "EnvConfig",
-           "LanguagePerturbation", "RGBObservation", "make_vec", "register_task"]
+__all__ = ["ENV_IDS", "ENTRY_POINTS", "env_id_of", "vector_entry_of", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv",
+           "MorphoSimVectorEnv", "EnvConfig", "LanguagePerturbation", "RGBObservation", "make_vec", "register_task"]
 
 ENTRY_POINTS = {
     "track": "morphosim_gym.envs.track:TrackEnv",
@@ -39,13 +41,20 @@ def env_id_of(kind: str) -> str:
     return f"MorphoSim/{kind.capitalize()}-v0"
 
 
+def vector_entry_of(kind: str) -> str:
+    """The `vector_entry_point` of a task kind's ids: the native batched vector env
+    (`gym.make_vec(id, n, vectorization_mode="vector_entry_point")`)."""
+    return f"morphosim_gym.envs.native_vector:vector_{kind}"
+
+
 ENV_IDS = tuple(env_id_of(kind) for kind in ENTRY_POINTS)
 
 for _kind, _entry in ENTRY_POINTS.items():
     if env_id_of(_kind) not in registry:
         # No max_episode_steps: the clip ends the episode (truncation at its last frame), so a
         # changed control_hz or clip length never disagrees with a fixed step limit.
-        register(id=env_id_of(_kind), entry_point=_entry, disable_env_checker=False)
+        register(id=env_id_of(_kind), entry_point=_entry, vector_entry_point=vector_entry_of(_kind),
+                 disable_env_checker=False)
 
 _LAZY = {
     "TrackEnv": "morphosim_gym.envs.track",
@@ -56,6 +65,7 @@ _LAZY = {
     "LanguagePerturbation": "morphosim_gym.envs.wrappers",
     "RGBObservation": "morphosim_gym.envs.wrappers",
     "make_vec": "morphosim_gym.envs.vector",
+    "MorphoSimVectorEnv": "morphosim_gym.envs.native_vector",
     "register_task": "morphosim_gym.envs.vector",
 }
 

@@ -180,11 +180,20 @@ class MorphoSimEnv(gym.Env):
             return self._step(a)
 
     def _step(self, a: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        self._advance(a)
+        return self._step_outcome(a, self._render(self.world.t))
+
+    def _advance(self, a: np.ndarray) -> None:
+        """The part of a step before its render: move the rig, advance the scene clock."""
         world = self.world
         self._rig.apply(a, self._dt)
         self._step_count += 1
         world.t = min(self._step_count * self._dt, world.duration)
-        views, view = self._render(world.t)
+
+    def _step_outcome(self, a: np.ndarray, rendered: tuple[Views, TaskView]) -> tuple[dict, float, bool, bool, dict]:
+        """The part of a step after its render (`_render`'s views): reward, flags, observation, info."""
+        world = self.world
+        views, view = rendered
         ev = self._task.evaluate(world, self._rig, view, a)
         terminated = bool(self.config.terminate_on_success and ev.terminate)
         truncated = bool(world.t >= world.duration - 1e-9)
@@ -200,9 +209,16 @@ class MorphoSimEnv(gym.Env):
 
     def _render(self, t: float) -> tuple[Views, TaskView]:
         """Every render camera's view at scene time t, and the task camera's `TaskView`."""
+        sources, cams, background = self._render_request(t)
+        return self._rendered(cams, render_scene(sources, cams, background=background), t)
+
+    def _render_request(self, t: float) -> tuple[list, list, tuple]:
+        """What `_render` draws at time t: (Gaussian sources, one camera per render camera, background)."""
         w, h = self.config.width, self.config.height
-        cams = [self._rig.camera(n, w, h) for n in self._render_cams]
-        out = render_scene(self._sources(t), cams, background=self._world.scene.background)
+        return self._sources(t), [self._rig.camera(n, w, h) for n in self._render_cams], self._world.scene.background
+
+    def _rendered(self, cams: list, out: Any, t: float) -> tuple[Views, TaskView]:
+        """`_render`'s result from the render of its request (`out.rgb[i]` etc. per camera i)."""
         views = {name: (cams[i], out.rgb[i], out.depth[i], out.instance[i]) for i, name in enumerate(self._render_cams)}
         cam, _, _, instance = views[self._task.task_camera]
         return views, TaskView(cam, instance, t)

@@ -1,5 +1,6 @@
-"""Vector envs on a few CPU cores (a thin layer over `gym.make_vec`), and registering YAML tasks
-as env ids."""
+"""Vector envs on a few CPU cores (a thin layer over `gym.make_vec`: the native batched
+`MorphoSimVectorEnv`, or Gymnasium's sync / async vector envs), and registering YAML tasks as
+env ids."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 
 import gymnasium as gym
 
-from . import ENTRY_POINTS
+from . import ENTRY_POINTS, vector_entry_of
 
 __all__ = ["make_vec", "register_task"]
 
@@ -21,10 +22,14 @@ def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", rend
     Args:
         env_id: a registered id (e.g. "MorphoSim/Track-v0").
         num_envs: how many envs.
-        vectorization_mode: "async" (one process per env; the fast choice on several cores) or "sync".
-        render_threads: numba threads per env; None = the envs' default (1: on a few cores, small
-            renders gain little from threads and lose a lot when the cores are shared).
-        wrappers: callables applied to each env after `gym.make`.
+        vectorization_mode: "vector" (the native `MorphoSimVectorEnv`: all envs in this process,
+            every step's cameras rendered in one batched call on all cores; the fast choice),
+            "async" (one process per env) or "sync" (Gymnasium's SyncVectorEnv).
+        render_threads: "sync"/"async": numba threads per env; None = the envs' default (1: on a
+            few cores, small renders gain little from threads and lose a lot when the cores are
+            shared). "vector": threads of the batched render (None: all of numba's threads).
+        wrappers: callables applied to each env after `gym.make` ("sync"/"async" only; for
+            "vector", pass `perturbations=[...]`, one `LanguagePerturbation` dict per env).
         context: multiprocessing start method for "async" (default "spawn": the parent may
             already run numba's threading layer, which is not safe to fork).
         kwargs: passed to `gym.make` for every env.
@@ -34,8 +39,15 @@ def make_vec(env_id: str, num_envs: int, vectorization_mode: str = "async", rend
     """
     if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
         raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
-    if vectorization_mode not in ("async", "sync"):
-        raise ValueError(f"Expected vectorization_mode 'async' or 'sync', found {vectorization_mode!r}")
+    if vectorization_mode not in ("vector", "async", "sync"):
+        raise ValueError(f"Expected vectorization_mode 'vector', 'async' or 'sync', found {vectorization_mode!r}")
+    if vectorization_mode == "vector":
+        if wrappers:
+            raise ValueError("Expected no wrappers with vectorization_mode='vector' (the native vector env steps "
+                             "the envs itself), found some; pass perturbations=[{...}, ...] (one "
+                             "LanguagePerturbation dict per env) for scheduled edits, or use 'sync'")
+        return gym.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point",
+                            render_threads=render_threads, **kwargs)
     if render_threads is not None:
         kwargs = dict(kwargs, render_threads=render_threads)
     vector_kwargs = {"context": context or "spawn"} if vectorization_mode == "async" else {}
@@ -57,5 +69,6 @@ def register_task(source: str | Path | Mapping[str, Any], env_id: Optional[str] 
         name = "".join(part.capitalize() for part in spec.name.replace("_", "-").split("-") if part)
         env_id = f"MorphoSim/{name}-v0"
     task_arg = str(source) if isinstance(source, (str, Path)) else spec
-    gym.register(id=env_id, entry_point=ENTRY_POINTS[spec.kind], kwargs=dict(kwargs, task=task_arg))
+    gym.register(id=env_id, entry_point=ENTRY_POINTS[spec.kind], vector_entry_point=vector_entry_of(spec.kind),
+                 kwargs=dict(kwargs, task=task_arg))
     return env_id

@@ -1,0 +1,293 @@
+"""`MorphoSimVectorEnv`: N MorphoSim worlds stepped in one process, all their cameras rendered in
+one batched call (`render_batch`), registered as every id's Gymnasium `vector_entry_point`.
+
+The batch holds N ordinary `MorphoSimEnv` instances and runs their own step in its two halves
+(`_advance`: rig and clock; `_step_outcome`: reward, observation, info) around one batched
+render of every env's `_render_request`, so env i with seed s gives exactly what a single env
+with seed s gives (the batched kernel is bit-identical to the single render). Resets (rare) run
+each env's own `reset`.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any, Callable, Mapping, Optional, Sequence
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.envs.registration import load_env_creator
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
+
+from morphosim_gym.render.api import render_batch
+
+from . import ENTRY_POINTS
+from .spaces import check_action
+from .threads import numba_threads
+from .wrappers import LanguagePerturbation
+
+__all__ = ["MorphoSimVectorEnv", "vector_entry_point"]
+
+
+class _Deferred(gym.Env):
+    """The env under a per-env `LanguagePerturbation` in the batch: its `step` only advances the env
+    (the batch renders and finishes the step) and hands the wrapper a placeholder result whose
+    info receives the wrapper's keys; `reset` is the env's own."""
+
+    def __init__(self, env: gym.Env, pending: list) -> None:
+        self._env = env
+        self._pending = pending
+        self.observation_space, self.action_space = env.observation_space, env.action_space
+        self.metadata = env.metadata
+
+    @property
+    def unwrapped(self) -> gym.Env:
+        return self._env
+
+    def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None) -> tuple[dict, dict]:
+        return self._env.reset(seed=seed, options=options)
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+        info: dict = {}
+        self._pending.append((action, info))
+        return None, 0.0, False, False, info
+
+
+class MorphoSimVectorEnv(VectorEnv):
+    """N MorphoSim envs of one kind stepped together, their cameras rendered in one batched call.
+
+    Args:
+        num_envs: how many envs.
+        kind: the task kind ("track", "reach", "find"); the registered ids set it.
+        render_threads: numba threads of the batched render (None: all of numba's threads).
+            Each env's own work (skinning, resets) keeps the env's `render_threads` (default 1).
+        backend: the batched render's backend ("cpu", or "gsplat" on a CUDA machine).
+        perturbations: one `LanguagePerturbation` keyword dict (schedule, edits, probability,
+            max_random_edits) or None per env: env i is stepped through its own
+            `LanguagePerturbation`, exactly as `LanguagePerturbation(gym.make(id), **p)` would be,
+            and its info carries "perturbations".
+        env_kwargs: one dict of extra env arguments per env (over `kwargs`), or None.
+        kwargs: env arguments (the fields of `EnvConfig`) for every env.
+
+    Gymnasium's `autoreset_mode` is NEXT_STEP (as `SyncVectorEnv`'s default): the step after an
+    env terminates or truncates resets it and returns its reset observation and info, with reward
+    0 and both flags False. `reset(seed=s)` seeds env i with s + i; `options` is one dict for all
+    envs (with an optional boolean "reset_mask") or a list of one dict (or None) per env.
+    Per-env access: `envs[i]` (the `MorphoSimEnv`), `perturb(i, text)`, `call`, `get_attr`,
+    `set_attr`.
+
+    Examples:
+        >>> venv = gym.make_vec("MorphoSim/Track-v0", 8, vectorization_mode="vector_entry_point")  # doctest: +SKIP
+        >>> obs, info = venv.reset(seed=0, options=[{"edits": ["make the ball blue"]}] + [None] * 7)  # doctest: +SKIP
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
+
+    def __init__(self, num_envs: int, kind: str = "track", render_threads: Optional[int] = None,
+                 backend: str = "cpu", perturbations: Optional[Sequence[Optional[Mapping[str, Any]]]] = None,
+                 env_kwargs: Optional[Sequence[Optional[Mapping[str, Any]]]] = None, **kwargs: Any) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
+        if kind not in ENTRY_POINTS:
+            raise ValueError(f"Expected kind in {sorted(ENTRY_POINTS)}, found {kind!r}")
+        n = int(num_envs)
+        per_env = _per_env(env_kwargs, n, "env_kwargs")
+        perturbations = _per_env(perturbations, n, "perturbations")
+        creator: Callable[..., gym.Env] = load_env_creator(ENTRY_POINTS[kind])
+        self.num_envs = n
+        self.render_threads = render_threads
+        self.backend = backend
+        self.envs = [creator(**{**kwargs, **(per_env[i] or {})}) for i in range(n)]
+        self._pending: list[list] = [[] for _ in range(n)]
+        self._steppers = [LanguagePerturbation(_Deferred(env, self._pending[i]), **perturbations[i])
+                          if perturbations[i] is not None else None for i, env in enumerate(self.envs)]
+        env0 = self.envs[0]
+        self.render_mode = env0.render_mode
+        self.metadata = dict(self.metadata, render_fps=env0.metadata.get("render_fps"))
+        self.single_observation_space = env0.observation_space
+        self.single_action_space = env0.action_space
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self._autoreset = np.zeros(n, dtype=bool)
+        self._obs: list = [None] * n
+
+    # ================================================================== reset
+    def reset(self, *, seed: int | Sequence[Optional[int]] | None = None,
+              options: Optional[Mapping[str, Any] | Sequence[Optional[Mapping[str, Any]]]] = None
+              ) -> tuple[dict, dict]:
+        n = self.num_envs
+        seeds = _seeds(seed, n)
+        mask, per_env = _reset_options(options, n)
+        infos: dict = {}
+        for i in range(n):
+            if not mask[i]:
+                continue
+            target = self._steppers[i] or self.envs[i]
+            self._obs[i], info = target.reset(seed=seeds[i], options=per_env[i])
+            self._autoreset[i] = False
+            infos = self._add_info(infos, info, i)
+        return self._batched_obs(), infos
+
+    # ================================================================== step
+    def step(self, actions: Any) -> tuple[dict, np.ndarray, np.ndarray, np.ndarray, dict]:
+        n = self.num_envs
+        acts = list(iterate(self.action_space, actions))
+        if len(acts) != n:
+            raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
+        rewards = np.zeros(n, dtype=np.float64)
+        terms = np.zeros(n, dtype=bool)
+        truncs = np.zeros(n, dtype=bool)
+        infos: dict = {}
+        stepping, extra = [], {}
+        for i in range(n):
+            if self._autoreset[i]:
+                target = self._steppers[i] or self.envs[i]
+                self._obs[i], info = target.reset()
+                infos = self._add_info(infos, info, i)
+                continue
+            a, extra[i] = self._advance(i, acts[i])
+            stepping.append((i, a))
+        for (i, a), rendered in zip(stepping, self._render([i for i, _ in stepping])):
+            env = self.envs[i]
+            self._obs[i], rewards[i], terms[i], truncs[i], info = env._step_outcome(a, rendered)
+            info.update(extra[i])
+            infos = self._add_info(infos, info, i)
+        self._autoreset = terms | truncs
+        return self._batched_obs(), rewards, terms, truncs, infos
+
+    def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
+        """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
+        action and the info keys its wrapper added."""
+        env = self.envs[i]
+        wrapper = self._steppers[i]
+        if wrapper is not None:
+            pending = self._pending[i]
+            pending.clear()
+            wrapper.step(action)
+            action, extra = pending.pop()
+        else:
+            extra = {}
+        a = check_action(action, env.action_space.shape)
+        with numba_threads(env.config.render_threads):
+            env._advance(a)
+        return a, extra
+
+    def _render(self, indices: Sequence[int]) -> list:
+        """`_render`'s result for each of these envs, from one batched render of all their cameras."""
+        requests = []
+        for i in indices:
+            env = self.envs[i]
+            with numba_threads(env.config.render_threads):
+                requests.append(env._render_request(env.world.t))
+        views = [(sources, cam, bg) for sources, cams, bg in requests for cam in cams]
+        with numba_threads(self.render_threads):
+            outs = render_batch(views, backend=self.backend)
+        rendered, k = [], 0
+        for i, (_, cams, _) in zip(indices, requests):
+            mine = outs[k:k + len(cams)]
+            k += len(cams)
+            out = SimpleNamespace(rgb=[o.rgb for o in mine], depth=[o.depth for o in mine],
+                                  instance=[o.instance for o in mine])
+            rendered.append(self.envs[i]._rendered(cams, out, self.envs[i].world.t))
+        return rendered
+
+    def _batched_obs(self) -> dict:
+        return concatenate(self.single_observation_space, self._obs,
+                           create_empty_array(self.single_observation_space, self.num_envs))
+
+    # ================================================================== per-env access
+    def perturb(self, i: int, text: str) -> bool:
+        """Apply a language edit to env i's scene now (`MorphoSimEnv.perturb`)."""
+        return self.envs[self._index(i)].perturb(text)
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple:
+        """Call (or read) attribute `name` of every env; a tuple of the results."""
+        out = []
+        for env in self.envs:
+            attr = getattr(env, name)
+            out.append(attr(*args, **kwargs) if callable(attr) else attr)
+        return tuple(out)
+
+    def get_attr(self, name: str) -> tuple:
+        """Attribute `name` of every env."""
+        return tuple(getattr(env, name) for env in self.envs)
+
+    def set_attr(self, name: str, values: Any) -> None:
+        """Set attribute `name` of every env (one value for all, or a list of one per env)."""
+        if not isinstance(values, (list, tuple)):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(f"Expected {self.num_envs} values for set_attr({name!r}), found {len(values)}")
+        for env, value in zip(self.envs, values):
+            setattr(env, name, value)
+
+    def render(self) -> Optional[tuple]:
+        """Each env's `render()` frame (with render_mode="rgb_array")."""
+        if self.render_mode is None:
+            return None
+        return tuple(env.render() for env in self.envs)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        for env in self.envs:
+            env.close()
+
+    def _index(self, i: int) -> int:
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= int(i) < self.num_envs:
+            raise ValueError(f"Expected an env index in [0, {self.num_envs}), found {i!r}")
+        return int(i)
+
+
+def vector_entry_point(kind: str) -> Callable[..., MorphoSimVectorEnv]:
+    """The `vector_entry_point` of a task kind's ids: `MorphoSimVectorEnv` with that kind."""
+    if kind not in ENTRY_POINTS:
+        raise ValueError(f"Expected kind in {sorted(ENTRY_POINTS)}, found {kind!r}")
+
+    def make(num_envs: int = 1, **kwargs: Any) -> MorphoSimVectorEnv:
+        return MorphoSimVectorEnv(num_envs, kind=kind, **kwargs)
+
+    make.__name__ = f"vector_{kind}"
+    return make
+
+
+def __getattr__(name: str) -> Any:
+    # "morphosim_gym.envs.native_vector:vector_<kind>" (the registered vector entry points)
+    if name.startswith("vector_") and name[len("vector_"):] in ENTRY_POINTS:
+        return vector_entry_point(name[len("vector_"):])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _per_env(values: Optional[Sequence[Any]], n: int, name: str) -> list:
+    if values is None:
+        return [None] * n
+    values = list(values)
+    if len(values) != n or not all(v is None or isinstance(v, Mapping) for v in values):
+        raise ValueError(f"Expected {name} as a list of {n} dicts (or None), found {values!r}")
+    return [None if v is None else dict(v) for v in values]
+
+
+def _seeds(seed: Any, n: int) -> list:
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        return [int(seed) + i for i in range(n)]
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"Expected a seed, None or a list of {n} seeds, found {len(seeds)} seeds")
+    return seeds
+
+
+def _reset_options(options: Any, n: int) -> tuple[np.ndarray, list]:
+    """(which envs to reset, each one's options) of `reset(options=...)`."""
+    if options is None:
+        return np.ones(n, dtype=bool), [None] * n
+    if isinstance(options, Mapping):
+        opts = dict(options)
+        mask = opts.pop("reset_mask", None)
+        if mask is None:
+            mask = np.ones(n, dtype=bool)
+        mask = np.asarray(mask)
+        if mask.shape != (n,) or mask.dtype != np.bool_ or not mask.any():
+            raise ValueError(f"Expected options['reset_mask'] as a bool array of shape ({n},) with a True, "
+                             f"found {mask!r}")
+        return mask, [opts or None] * n
+    return np.ones(n, dtype=bool), _per_env(options, n, "options")

@@ -1,0 +1,170 @@
+"""The native vector env (`MorphoSimVectorEnv`): N worlds in one process, one batched render per
+step, env i identical to a single env seeded s + i (autoreset NEXT_STEP)."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from morphosim_gym.envs import ENV_IDS, LanguagePerturbation, MorphoSimVectorEnv, make_vec
+from tests.envs.conftest import FAST, PROMPT, make
+
+N = 2
+
+
+def _same(a, b) -> bool:
+    if isinstance(b, dict):
+        return isinstance(a, dict) and all(_same(a[k], v) for k, v in b.items())
+    if isinstance(b, np.ndarray) or isinstance(a, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b)
+    if isinstance(a, np.generic):            # vector infos store scalars in numpy arrays
+        a = a.item()
+    return type(a) is type(b) and a == b
+
+
+def _entry(vinfo: dict, i: int):
+    """Env i's info out of a vector info dict (values where its `_key` mask is set)."""
+    out = {}
+    for key, value in vinfo.items():
+        if isinstance(key, str) and key.startswith("_"):
+            continue
+        if isinstance(value, dict):
+            out[key] = _entry(value, i)
+        elif vinfo[f"_{key}"][i]:
+            out[key] = value[i]
+    return out
+
+
+def _check_info(vinfo: dict, i: int, single: dict) -> None:
+    got = _entry(vinfo, i)
+    assert set(got) == set(single)
+    for key, value in single.items():
+        assert _same(got[key], value), key
+
+
+def _check_obs(vobs: dict, i: int, single: dict) -> None:
+    assert set(vobs) == set(single)
+    for key, value in single.items():
+        assert vobs[key][i].dtype == value.dtype and np.array_equal(vobs[key][i], value), key
+
+
+def _rollout_compare(venv, singles, seed: int, max_steps: int = 90, extra_steps: int = 3) -> int:
+    vobs, vinfo = venv.reset(seed=seed)
+    for i, env in enumerate(singles):
+        obs, info = env.reset(seed=seed + i)
+        _check_obs(vobs, i, obs)
+        _check_info(vinfo, i, info)
+    rng = np.random.default_rng(seed)
+    done_prev = np.zeros(N, bool)
+    resets, after = 0, None
+    for step in range(max_steps):
+        actions = rng.uniform(-1, 1, venv.action_space.shape).astype(np.float32)
+        vobs, vrew, vterm, vtrunc, vinfo = venv.step(actions)
+        for i, env in enumerate(singles):
+            if done_prev[i]:
+                obs, info = env.reset()
+                rew, term, trunc = 0.0, False, False
+                resets += 1
+            else:
+                obs, rew, term, trunc, info = env.step(actions[i])
+            _check_obs(vobs, i, obs)
+            _check_info(vinfo, i, info)
+            assert vrew[i] == rew and vterm[i] == term and vtrunc[i] == trunc, (step, i)
+        done_prev = vterm | vtrunc
+        if resets >= N and after is None:
+            after = step
+        if after is not None and step >= after + extra_steps:
+            break
+    return resets
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_each_env_matches_a_single_env_over_episodes_with_autoreset(env_id):
+    kw = dict(FAST, scene_pool=2)
+    venv = gym.make_vec(env_id, N, vectorization_mode="vector_entry_point", **kw)
+    assert isinstance(venv, MorphoSimVectorEnv)
+    assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+    singles = [make(env_id, **kw) for _ in range(N)]
+    assert _rollout_compare(venv, singles, seed=7) >= N       # every env went through an autoreset
+    venv.close()
+
+
+def test_make_vec_vector_mode_and_errors():
+    venv = make_vec("MorphoSim/Track-v0", 2, vectorization_mode="vector", **FAST)
+    assert isinstance(venv, MorphoSimVectorEnv) and venv.num_envs == 2
+    obs, _ = venv.reset(seed=0)
+    assert obs["rgb"].shape == (2, 32, 32, 3)
+    with pytest.raises(ValueError, match="wrappers"):
+        make_vec("MorphoSim/Track-v0", 2, vectorization_mode="vector", wrappers=[lambda e: e], **FAST)
+    with pytest.raises(ValueError, match="'vector', 'async' or 'sync'"):
+        make_vec("MorphoSim/Track-v0", 2, vectorization_mode="gpu")
+    with pytest.raises(ValueError, match="num_envs"):
+        MorphoSimVectorEnv(0)
+    with pytest.raises(ValueError, match="kind"):
+        MorphoSimVectorEnv(1, kind="swim")
+    with pytest.raises(ValueError, match="actions for 2 envs"):
+        venv.step(np.zeros((3, 3), np.float32))
+    with pytest.raises(ValueError, match="env index"):
+        venv.perturb(5, "make the ball blue")
+    with pytest.raises(ValueError, match="seeds"):
+        venv.reset(seed=[1, 2, 3])
+    venv.close()
+
+
+def test_per_env_seeds_options_edits_and_attributes():
+    kw = dict(FAST, prompt=PROMPT)
+    venv = make_vec("MorphoSim/Track-v0", 2, vectorization_mode="vector", **kw)
+    obs, info = venv.reset(seed=[3, 4], options=[{"edits": ["make the ball blue"]}, None])
+    assert info["edits"][0] == ("make the ball blue",) and info["edits"][1] == ()
+    ref = make("MorphoSim/Track-v0", **kw)
+    ref_obs, _ = ref.reset(seed=3, options={"edits": ["make the ball blue"]})
+    assert np.array_equal(obs["rgb"][0], ref_obs["rgb"])
+    assert venv.perturb(1, "make the ball green") is True
+    a = np.zeros((2, 3), np.float32)
+    _, _, _, _, info = venv.step(a)
+    assert info["edits"][1] == ("make the ball green",) and info["edits"][0] == ("make the ball blue",)
+    assert venv.call("perturb", "make the ball red") == (True, True)
+    assert [s.history[-1] for s in venv.get_attr("scene")] == ["make the ball red"] * 2
+    venv.set_attr("marker", [1, 2])
+    assert venv.get_attr("marker") == (1, 2)
+    _, info = venv.reset(options={"reset_mask": np.array([False, True])})
+    assert list(info["_step"]) == [False, True]
+    venv.close()
+
+
+def test_language_perturbation_per_env_matches_the_wrapped_single_env():
+    kw = dict(FAST, prompt=PROMPT)
+    schedule = {2: "make the ball blue"}
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector",
+                    perturbations=[{"schedule": schedule}, None], **kw)
+    singles = [LanguagePerturbation(make("MorphoSim/Track-v0", **kw), schedule=schedule),
+               make("MorphoSim/Track-v0", **kw)]
+    vobs, vinfo = venv.reset(seed=1)
+    for i, env in enumerate(singles):
+        obs, info = env.reset(seed=1 + i)
+        _check_obs(vobs, i, obs)
+        _check_info(vinfo, i, info)
+    for _ in range(4):
+        a = np.full((N, 3), 0.3, np.float32)
+        vobs, vrew, _, _, vinfo = venv.step(a)
+        for i, env in enumerate(singles):
+            obs, rew, _, _, info = env.step(a[i])
+            _check_obs(vobs, i, obs)
+            _check_info(vinfo, i, info)
+            assert vrew[i] == rew
+    assert vinfo["perturbations"][0] == ((2, "make the ball blue", True),)
+    assert not vinfo["_perturbations"][1]
+    venv.close()
+
+
+def test_registered_task_ids_get_the_native_vector_env():
+    from morphosim_gym.envs import register_task
+
+    env_id = register_task("find", env_id="MorphoSim/FindNativeVectorTest-v0")
+    venv = gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", **FAST)
+    assert isinstance(venv, MorphoSimVectorEnv)
+    obs, info = venv.reset(seed=0)
+    single = make(env_id)
+    ref, ref_info = single.reset(seed=1)
+    assert np.array_equal(obs["rgb"][1], ref["rgb"]) and info["target"][1] == ref_info["target"]
+    venv.close()
