@@ -17,7 +17,7 @@ import argparse
 import importlib
 import sys
 from dataclasses import dataclass
-from typing import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 from .errors import BackendUnavailableError
 from .extras import EXIT_MISSING_EXTRA, missing_package_message
