@@ -212,3 +212,15 @@ def test_quality_without_brisque_stops_before_generating(tmp_path):
     code, out, err, _ = morphosim("quality", "a red ball", "--out", str(report), blocked=("brisque",))
     _assert_missing_extra(code, out, err, "bench", "brisque")
     assert not report.exists()
+
+
+def test_the_lower_layers_hints_are_the_readme_lines(monkeypatch):
+    """metrics sits below extras.py in the layers, so its hint is a literal: it must stay the README's line."""
+    from morphosim_gym.metrics import brisque_score
+    from morphosim_gym.viewer import app
+
+    monkeypatch.setitem(sys.modules, "brisque", None)
+    with pytest.raises(ImportError) as info:
+        brisque_score._model_class()
+    assert str(info.value).endswith(install_line("bench"))
+    assert app.PIP_HINT == install_line("viewer")
