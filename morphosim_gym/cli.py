@@ -16,8 +16,8 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-from dataclasses import dataclass
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 
 from .errors import BackendUnavailableError
 from .extras import EXIT_MISSING_EXTRA, missing_package_message
@@ -89,7 +89,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `morphosim` script."""
     argv = list(sys.argv[1:] if argv is None else argv)
     command = _command_of(argv)
-    prog = f"morphosim {command}" if command else "morphosim"
     try:
         parser = build_parser([command] if command else [])
         args = parser.parse_args(argv)
@@ -97,18 +96,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return EXIT_USAGE
         return int(args.func(args) or 0)
-    except ValueError as exc:  # our errors subclass ValueError and carry a message for people
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except ImportError as exc:
-        if _is_ours(exc.name):
-            raise                                   # one of our modules failing to import is a bug, not an install
-        message = missing_package_message(exc.name) if isinstance(exc, ModuleNotFoundError) and exc.name else exc
-        print(f"{prog}: error: {message}", file=sys.stderr)
-        return EXIT_MISSING_EXTRA
-    except BackendUnavailableError as exc:          # includes MissingExtraError from the commands' checks
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return EXIT_MISSING_EXTRA
+    except (ValueError, ImportError, BackendUnavailableError) as exc:
+        answer = _answer(exc)
+        if answer is None:
+            raise
+        message, code = answer
+        print(f"morphosim {command}: error: {message}" if command else f"morphosim: error: {message}",
+              file=sys.stderr)
+        return code
+
+
+def _answer(exc: Exception) -> tuple[str, int] | None:
+    """The one-line message and exit status for an error a person can act on; None for a bug (re-raised)."""
+    if isinstance(exc, ValueError):             # our errors subclass ValueError and carry a message for people
+        return str(exc), EXIT_USAGE
+    if isinstance(exc, ImportError):
+        if _is_ours(exc.name):                  # one of our modules failing to import is a bug, not an install
+            return None
+        missing = isinstance(exc, ModuleNotFoundError) and exc.name
+        return (missing_package_message(exc.name) if missing else str(exc)), EXIT_MISSING_EXTRA
+    return str(exc), EXIT_MISSING_EXTRA         # BackendUnavailableError, MissingExtraError included
 
 
 def _is_ours(module: str | None) -> bool:

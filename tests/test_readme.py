@@ -154,23 +154,25 @@ def readme_cases(text: str) -> list[Case]:
         if block.lang == "python":
             cases.append(_case(f"{where} python", "python", block.code, block.code))
         elif block.lang == "bash":
-            for n, line in enumerate(bash_lines(block.code)):
-                steps = [s.strip() for s in line.split(" && ")]
-                dropped = tuple(s for s in steps if any(re.search(p, s) for p in INSTALL_STEPS))
-                kept = " && ".join(s for s in steps if s not in dropped)
-                id_ = f"{where}+{n} bash: {line[:60]}"
-                if not kept:
-                    reasons = sorted({r for s in dropped for p, r in INSTALL_STEPS.items() if re.search(p, s)})
-                    cases.append(Case(id_, "bash", "", line, "skip", "only install steps: " + "; ".join(reasons),
-                                      dropped))
-                else:
-                    cases.append(_case(id_, "bash", kept, line, dropped))
+            cases.extend(_bash_case(f"{where}+{n} bash: {line[:60]}", line)
+                         for n, line in enumerate(bash_lines(block.code)))
         elif block.lang == "yaml":
             cases.append(Case(f"{where} yaml", "yaml", block.code, block.code, "parse"))
         else:
             cases.append(Case(f"{where} {block.lang}", block.lang, "", block.code, "skip",
                               f"a ```{block.lang} block is not code to run"))
     return cases
+
+
+def _bash_case(id_: str, line: str) -> Case:
+    """A bash line's check: its install steps dropped, the rest under `RULES`."""
+    steps = [s.strip() for s in line.split(" && ")]
+    dropped = tuple(s for s in steps if any(re.search(p, s) for p in INSTALL_STEPS))
+    kept = " && ".join(s for s in steps if s not in dropped)
+    if kept:
+        return _case(id_, "bash", kept, line, dropped)
+    reasons = sorted({r for s in dropped for p, r in INSTALL_STEPS.items() if re.search(p, s)})
+    return Case(id_, "bash", "", line, "skip", "only install steps: " + "; ".join(reasons), dropped)
 
 
 CASES = readme_cases(README.read_text())
