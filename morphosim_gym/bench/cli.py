@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..extras import EXIT_MISSING_EXTRA, install_line, require_extra
 from ..policies import POLICY_SPEC_HELP
 
 __all__ = ["register", "exit_code", "MAX_EXIT_FAILED", "EXIT_NOT_RUN"]
@@ -26,7 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "seeds) for each policy; write results.jsonl/json/csv, report.md and plots to --out. A rerun "
                     "with the same --out resumes where it stopped. Exit status: the number of failed episodes "
                     f"(capped at {MAX_EXIT_FAILED}); {EXIT_NOT_RUN} when the sweep cannot run at all (bad suite, "
-                    "unknown policy); 2 for a command-line usage error.",
+                    "unknown policy); 2 for a command-line usage error; "
+                    f"{EXIT_MISSING_EXTRA} when a package of the bench extra is missing ({install_line('bench')}).",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("suite", nargs="?", default=None,
                    help="a built-in suite name (see --list) or a suite YAML file")
@@ -84,6 +86,9 @@ def _bench(args: argparse.Namespace) -> int:
         raise ValueError("Expected a suite name or file (see morphosim bench --list), found none")
     if args.workers < 1:
         raise ValueError(f"Expected --workers >= 1, found {args.workers}")
+    require_extra("bench", "matplotlib", needed_for="morphosim bench (the report's plots)")   # before any episode
+    if args.backend == "ray":
+        require_extra("bench", "ray", needed_for="morphosim bench --backend ray")
     from .runner import run_sweep
 
     try:
@@ -103,6 +108,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _quality(args: argparse.Namespace) -> int:
+    require_extra("bench", "brisque", "libsvm", "skimage", needed_for="morphosim quality (BRISQUE)")
     from .quality import quality_main
 
     return quality_main(args)

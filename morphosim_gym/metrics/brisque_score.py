@@ -21,7 +21,7 @@ def _model_class() -> Any:
         from brisque import BRISQUE
     except ImportError as exc:
         raise ImportError(f"Expected the brisque package (with libsvm-official and scikit-image) for BRISQUE, "
-                          f"found it missing ({exc}); pip install -e '.[bench]'") from exc
+                          f'found it missing ({exc}); pip install -e ".[bench]"') from exc
     return BRISQUE
 
 

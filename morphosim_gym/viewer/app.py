@@ -27,6 +27,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..errors import BackendUnavailableError
+from ..extras import install_line
 from ..scene import Camera
 from .camera import camera_from_viewer, render_size, viewer_view
 from .session import Snapshot, ViewerSession, format_log, md_escape, resize_keep_fov
@@ -35,7 +36,7 @@ from .worker import FrameWorker
 
 __all__ = ["SceneViewer", "FrameInfo", "import_viser", "PIP_HINT"]
 
-PIP_HINT = 'pip install "morphosim-gym[viewer]"'
+PIP_HINT = install_line("viewer")           # the README's line
 MAX_LATENCIES = 1000      # command latencies a viewer keeps
 
 

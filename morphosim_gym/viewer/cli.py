@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ..policies import POLICY_SPEC_HELP, resolve_policy
+from ..extras import require_extra
+from ..policies import POLICY_SPEC_HELP
 
 __all__ = ["register"]
 
@@ -42,8 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _view(args: argparse.Namespace) -> int:
+    require_extra("viewer", "viser", needed_for="morphosim view")      # before any scene or env is made
     from ..generate.compose import GenerationConfig
     from ..pipeline import MorphoSim
+    from ..policies import resolve_policy
 
     if args.env is None and args.source is None:
         raise ValueError("Expected a scene file, a directory or a prompt to view (or --env ID), found none")

@@ -81,7 +81,7 @@ def test_missing_viser_names_the_pip_command(monkeypatch):
     from morphosim_gym.viewer import app
 
     monkeypatch.setitem(sys.modules, "viser", None)
-    with pytest.raises(BackendUnavailableError, match=r"morphosim-gym\[viewer\]"):
+    with pytest.raises(BackendUnavailableError, match=r'install it with: pip install -e "\.\[viewer\]"$'):
         app.import_viser()
 
 
