@@ -47,7 +47,7 @@ from .grounding import (ALL_WORDS, CAMERA_WORDS, SceneItem, ground_noun, ground_
 from .lexicon import (AUX, CLOCKWISE_WORDS, COLLECTIVE_NOUNS, DIRECTION_WORDS, DIRECTIONS, FAR_WORDS, NUMBER_WORDS,
                       PLURAL_DEFAULT_COUNT, SIZE_WORDS, SPEED_PHRASES, SPEED_VERBS, VERBS, VIEWER_WORDS,
                       correct_typo, lexicon_words, vec_norm, verb_info)
-from .plan import (MAX_COUNT, CameraSpec, ColorSpec, EditOp, MotionSpec, ObjectSpec, Plan, Target)
+from .plan import MAX_COUNT, CameraSpec, ColorSpec, EditOp, MotionSpec, ObjectSpec, Plan, Target, edit_op
 from .vocabulary import CATEGORIES, DEFAULT_SETTING, noun_to_category, singular, word_to_setting
 
 __all__ = ["parse_rules", "tokenize", "MAX_TEXT_CHARS", "EXAMPLES"]
@@ -1212,14 +1212,14 @@ class _RuleParser:
                 else:
                     name = singular(cam_target.head)
                 d["camera"] = CameraSpec(cam.motion, cam.direction, cam.speed, cam.speed_word, name)
-            return EditOp(**d)
+            return edit_op(**d)
         end_np = d.pop("end_np", None)
         if end_np is not None:
             d["end"] = self._edit_landmark(end_np, toks)
         around_np = d.pop("around_np", None)
         if around_np is not None:
             d["around"] = self._edit_landmark(around_np, toks)
-        return EditOp(targets=targets, **d)
+        return edit_op(targets=targets, **d)
 
     def _edit_landmark(self, np_: _NP, toks: list[str]) -> str:
         if self.generated:
