@@ -24,11 +24,16 @@ import threading
 from pathlib import Path
 from typing import Iterable
 
-from .colors import CSS_COLORS, EXTRA_COLORS, COLOR_MODIFIERS, MODIFIER_SYNONYMS
-from .vocabulary import CATEGORIES, SETTING_WORDS, _NOUNS
+from .colors import COLOR_MODIFIERS, CSS_COLORS, EXTRA_COLORS, MODIFIER_SYNONYMS
+from .vocabulary import _NOUNS, CATEGORIES, SETTING_WORDS
 
 __all__ = ["SPEED_PHRASES", "SPEED_VERBS", "SIZE_WORDS", "NUMBER_WORDS", "DIRECTIONS", "VERBS", "verb_info",
-           "correct_typo", "lexicon_words", "english_words", "PLURAL_DEFAULT_COUNT", "COLLECTIVE_NOUNS", "vec_norm"]
+           "correct_typo", "lexicon_words", "english_words", "PLURAL_DEFAULT_COUNT", "COLLECTIVE_NOUNS", "vec_norm",
+           "EXAMPLES", "COMPOUNDS", "CONTRACTIONS", "ITS_NEXT", "DETS", "PREPS", "LOCATIVE_PREPS", "CONJ", "RELATIVE",
+           "INTENSIFIERS", "STATIONARY", "PRONOUNS", "EDIT_VERBS", "EDIT_STOP_VERBS", "SPATIAL_NOUNS", "PREAMBLE_WORDS",
+           "PREAMBLE_PHRASES", "SEGMENT_PUNCT", "SPEED_WORDS_1", "VIEWERS", "SIDE_WORDS", "SIDE_TAIL", "MODALS",
+           "CONTINUATIONS", "CAMERA_ORBIT", "CAMERA_PAN", "CAMERA_DOLLY", "CAMERA_FIXED", "CAMERA_BOUNDARY",
+           "ADDITIVE_COLORS", "DARKER", "BRIGHTER", "REMOVE_WORDS", "LEFTOVER_OK", "FILLER"]
 
 Vec3 = tuple[float, float, float]
 
@@ -333,3 +338,104 @@ def correct_typo(word: str) -> str | None:
     """The parser word `word` is one edit away from (insert, delete, substitute, transpose), or None
     when the word is known, short (< 4 letters), a real English word, or ambiguous."""
     return _TYPOS.correct(word, lexicon_words())
+
+
+# -- parser word classes (the rule parser's closed word lists) -------------------------------------------
+
+EXAMPLES = ('"a red ball bounces from right to left"', '"a red cube moves to the plate while the camera circles '
+            'the table"', '"make the bus yellow"', '"delete the ball"', '"reverse its motion"')
+COMPOUNDS = {"zig-zag": "zigzag", "zig zag": "zigzag", "counter-clockwise": "counterclockwise",
+             "counter clockwise": "counterclockwise", "anti-clockwise": "anticlockwise",
+             "anti clockwise": "anticlockwise", "north-east": "northeast", "north-west": "northwest",
+             "south-east": "southeast", "south-west": "southwest", "north east": "northeast",
+             "north west": "northwest", "south east": "southeast", "south west": "southwest",
+             "back-and-forth": "back and forth", "to-and-fro": "to and fro", "get rid of": "getridof",
+             "a lot": "alot", "colour": "color", "colours": "colors", "coloured": "colored",
+             "grey": "grey", "aeroplane": "airplane", "towards": "toward", "afterwards": "afterward"}
+CONTRACTIONS = {"don't": ("do", "not"), "doesn't": ("does", "not"), "didn't": ("did", "not"), "isn't": ("is", "not"),
+                "aren't": ("are", "not"), "won't": ("will", "not"), "can't": ("can", "not"), "cannot": ("can", "not"),
+                "let's": ("let", "us"), "i'd": ("i", "would"), "it'll": ("it", "will"), "shouldn't": ("should", "not")}
+ITS_NEXT = {"motion", "movement", "direction", "color", "speed", "path", "trajectory", "course", "way", "velocity",
+            "heading", "colors", "hue"}
+DETS = {"a", "an", "the", "this", "that", "these", "those", "another", "its", "their", "his", "her", "my", "our",
+        "your", "each", "every", "all", "any"}
+PREPS = {"from", "to", "toward", "into", "onto", "through", "across", "along", "over", "on", "in", "inside",
+         "within", "under", "beneath", "below", "above", "by", "near", "beside", "behind", "past", "between",
+         "among", "around", "round", "at", "with", "upon", "atop", "alongside", "throughout", "via", "against",
+         "off", "out", "for", "without", "underneath", "amid", "amongst", "beyond", "towards"}
+LOCATIVE_PREPS = {"through", "across", "along", "over", "on", "in", "inside", "within", "under", "beneath", "below",
+                  "above", "by", "near", "beside", "behind", "past", "between", "among", "at", "upon", "atop",
+                  "alongside", "throughout", "via", "underneath", "amid", "amongst", "beyond", "against", "off"}
+CONJ = {"and", "or", "but", "while", "as", "whereas", "whilst", "meanwhile", "then", "plus", "also", "so"}
+RELATIVE = {"that", "which", "who", "whose"}
+INTENSIFIERS = {"very", "really", "extremely", "super", "incredibly", "quite", "rather", "pretty", "so"}
+STATIONARY = {"still", "stationary", "motionless", "static", "idle", "immobile", "unmoving", "parked"}
+PRONOUNS = {"it", "them", "they", "its", "their", "itself", "themselves", "both", "he", "she", "him", "his", "her"}
+EDIT_VERBS = {"make", "turn", "paint", "color", "recolor", "recolour", "dye", "tint", "shade", "change", "set",
+              "switch", "alter", "delete", "remove", "erase", "eliminate", "discard", "getridof", "take", "clear",
+              "extract", "isolate", "segment", "cut", "pull", "single", "keep", "show", "only", "separate",
+              "reverse", "invert", "flip", "redirect", "move", "send", "steer", "direct", "guide", "stop", "halt",
+              "freeze", "pause", "speed", "slow", "accelerate", "decelerate", "double", "halve", "triple",
+              "quadruple", "darken", "brighten", "lighten", "dim", "orbit", "circle", "rotate", "pan", "zoom",
+              "dolly", "let", "have", "give", "add", "increase", "decrease", "reduce", "hide", "drop", "bounce",
+              "zigzag", "go", "drive", "fly", "roll", "run", "swim", "sail", "head", "apply", "whiten",
+              "blacken", "redden", "recolorize", "colorize", "wipe"}
+# Edit verbs that end a noun phrase ("make the sedan reverse"); common adjectives such as "clear" or
+# "single" are left out so that "crystal-clear waters" stays one phrase.
+EDIT_STOP_VERBS = {"make", "turn", "paint", "recolor", "recolour", "dye", "tint", "change", "delete", "remove", "erase",
+                   "eliminate", "discard", "extract", "isolate", "reverse", "invert", "redirect", "send", "steer", "halt",
+                   "freeze", "pause", "speed", "slow", "accelerate", "decelerate", "darken", "brighten", "lighten",
+                   "orbit", "pan", "zoom", "dolly", "getridof"}
+# Place nouns that are parts of space, not objects: "to the edge", "across the surface".
+SPATIAL_NOUNS = {"edge", "edges", "side", "sides", "end", "center", "centre", "middle", "corner", "corners", "front",
+                 "back", "surface", "distance", "horizon", "foreground", "background", "bottom", "top", "spot",
+                 "place", "position", "area", "space", "direction", "way", "path", "line", "finish", "goal",
+                 "destination", "start", "origin", "point", "frame", "screen", "scene", "picture", "image",
+                 "view", "world", "sunlight", "sun", "light", "air", "waves", "current", "wind", "dark", "night",
+                 "day", "morning", "evening", "sunset", "sunrise", "weather", "rain", "fog", "mist", "shadow",
+                 "shadows", "lane", "trail", "course", "route", "pace", "speed", "motion", "manner",
+                 "runway", "airport", "track", "tracks", "railway", "rail", "rails", "bridge", "tunnel", "sidewalk",
+                 "other", "another"}
+PREAMBLE_WORDS = {"please", "now", "and", "also", "then", "next", "finally", "so", "ok", "okay", "just", "kindly",
+                  "afterward", "after", "later", "lastly", "additionally", "first", "second", "third"}
+PREAMBLE_PHRASES = [("can", "you"), ("could", "you"), ("would", "you"), ("will", "you"), ("i", "want", "you", "to"),
+                    ("i", "would", "like", "you", "to"), ("i", "d", "like", "you", "to"), ("let", "us"),
+                    ("go", "ahead", "and"), ("try", "to"), ("after", "that"), ("i", "need", "you", "to"),
+                    ("lets",), ("we", "should"), ("you", "should")]
+SEGMENT_PUNCT = {".", "!", "?", ";"}
+SPEED_WORDS_1 = {p[0] for p in SPEED_PHRASES if len(p) == 1}
+VIEWERS = set(VIEWER_WORDS)
+SIDE_WORDS = {"left": "left", "right": "right", "top": "up", "bottom": "down", "north": "north", "south": "south",
+              "east": "east", "west": "west", "northeast": "northeast", "northwest": "northwest",
+              "southeast": "southeast", "southwest": "southwest", "up": "up", "down": "down", "sky": "up",
+              "ground": "down", "upper": "up", "lower": "down", "leftside": "left", "rightside": "right"}
+SIDE_TAIL = {"side", "edge", "end", "part", "corner", "of", "frame", "screen", "hand", "bank", "half"}
+MODALS = {"should", "must", "shall", "will", "needs", "need", "has", "have", "ought", "is", "are", "becomes",
+          "become", "turns", "gets", "get"}
+CONTINUATIONS = {"stops": "stop", "halts": "stop", "freezes": "stop", "reverses": "reverse", "disappears": "remove",
+                 "vanishes": "remove", "turns": "turn", "becomes": "make", "speeds": "speed", "slows": "slow",
+                 "changes": "change", "accelerates": "accelerate", "decelerates": "decelerate"}
+CAMERA_ORBIT = {"orbit", "orbits", "orbiting", "orbited", "circle", "circles", "circling", "circled", "rotate", "rotates",
+                "rotating", "rotated", "revolve", "revolves", "revolving", "around", "round", "spins", "spin", "spinning",
+                "sweeps", "sweep", "sweeping", "arcs", "arc"}
+CAMERA_PAN = {"pan", "pans", "panning", "panned", "turns", "turn", "turning", "swivels", "swivel", "swings", "tracks",
+              "track", "tracking", "slides", "slide", "sliding", "trucks", "truck"}
+CAMERA_DOLLY = {"dolly", "dollies", "dollying", "zoom", "zooms", "zooming", "push", "pushes", "pushing", "pull", "pulls",
+                "pulling", "approaches", "approach", "approaching", "closer", "nearer", "retreats", "retreat", "backs",
+                "recedes", "in", "out", "forward", "forwards", "backward", "backwards", "back", "away", "closes"}
+CAMERA_FIXED = {"static", "fixed", "still", "stationary", "locked", "steady", "motionless", "stays", "stay", "remains",
+                "immobile", "stable", "unmoving", "tripod", "freeze", "frozen", "stopped", "stops", "stop"}
+CAMERA_BOUNDARY = {"while", "as", "whereas", "whilst", ",", "but", "meanwhile"}
+ADDITIVE_COLORS = {"redder": "red", "bluer": "blue", "greener": "green", "yellower": "yellow", "pinker": "pink",
+                   "whiter": "white", "oranger": "orange", "purpler": "purple", "greyer": "grey", "grayer": "gray",
+                   "blacker": "black", "browner": "brown"}
+DARKER = {"darker": 0.6, "dimmer": 0.6, "duller": 0.7, "darken": 0.6, "dim": 0.6, "blacker": 0.6}
+BRIGHTER = {"brighter": 1.5, "lighter": 1.5, "brighten": 1.5, "lighten": 1.5, "shinier": 1.3}
+REMOVE_WORDS = {"disappear", "vanish", "invisible", "gone", "go away", "hidden"}
+LEFTOVER_OK = {"from", "the", "scene", "view", "frame", "picture", "video", "image", "please", "entirely",
+               "completely", "now", "too", "as", "well", "also", "again", "out", "away", "of", "in", "world",
+               "whole", "entire", "right", "immediately", "instantly", ",", "direction", "motion", "movement",
+               "'s", "trajectory", "path", "course", "heading", "velocity", "only", "just"}
+FILLER = {"please", "color", "colored", "coloured", "instead", "again", "too", "now", "one", "ones", "as", "well",
+          "in", "the", "scene", "from", "entirely", "completely", "totally", "fully", "of", "tint", "shade",
+          "hue", "paint", "also"}
