@@ -439,3 +439,22 @@ LEFTOVER_OK = {"from", "the", "scene", "view", "frame", "picture", "video", "ima
 FILLER = {"please", "color", "colored", "coloured", "instead", "again", "too", "now", "one", "ones", "as", "well",
           "in", "the", "scene", "from", "entirely", "completely", "totally", "fully", "of", "tint", "shade",
           "hue", "paint", "also"}
+
+# Relative speeds ("twice as fast", "at half speed", "3 times the normal speed", "much faster").
+AS_SPEED_FACTORS = {**{(m, w): 0.5 for m in ("twice", "double") for w in ("slow", "slowly")},
+                    **{(m, w): 2.0 for m in ("twice", "double") for w in ("fast", "quickly", "quick", "rapidly")},
+                    **{("half", w): 0.5 for w in ("fast", "quickly", "quick")}}
+FRACTION_FACTORS = {"half": 0.5, "double": 2.0, "twice": 2.0, "triple": 3.0}
+FAST_COMPARATIVES = ("faster", "quicker", "speedier")
+SPEED_TIMES_FILLERS = ("the", "normal", "its", "their", "original", "speed", "current")
+MUCH_WORDS = ("much", "alot", "far", "way", "lot")
+BIT_WORDS = ("bit", "little", "slightly", "somewhat", "tad")
+# Words a relative speed phrase can start with (besides digits).
+RELATIVE_SPEED_STARTS = frozenset({"minus", "negative", "twice", "double", "half", "at", "to", "triple", "slower",
+                                   *FAST_COMPARATIVES, *NUMBER_WORDS})
+# Adjectives between "in a" and a path noun ("in a big circle", "in a straight line").
+PATH_MODIFIERS = ("big", "large", "small", "wide", "tight", "little", "circular", "straight", "zigzag", "wavy", "round")
+# Motion verbs that take a direct object, and the role of that object in the motion.
+VERB_OBJECT_ROLES = {**dict.fromkeys(("circle", "orbit", "revolve", "loop"), "around"),
+                     **dict.fromkeys(("chase", "follow", "approach", "reach"), "end"), "leave": "start",
+                     **dict.fromkeys(("cross", "pass", "traverse", "enter", "climb", "descend"), "statics")}

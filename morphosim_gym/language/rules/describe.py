@@ -22,8 +22,9 @@ from ..lexicon import (
 from ..plan import MAX_COUNT, CameraSpec, ColorSpec
 from ..vocabulary import noun_to_category, singular
 from .camera import extract_camera_clauses, read_camera
-from .motion import PhraseScanner, Predicate, combine_directions, merge_motion, merge_pred, path_of
+from .motion import Predicate, combine_directions, merge_motion, merge_pred, path_of
 from .nouns import NounPhrase, clause_boundary, parse_np
+from .scanner import PhraseScanner
 from .tokens import detok, is_number
 
 __all__ = ["ObjectDraft", "number_agreement", "DescriptionReader"]

@@ -21,8 +21,9 @@ from ..lexicon import (
 from ..plan import CameraSpec, ColorSpec
 from ..vocabulary import noun_to_category, singular
 from .camera import read_camera
-from .motion import PhraseScanner, Predicate, combine_directions
+from .motion import Predicate, combine_directions
 from .nouns import parse_np
+from .scanner import PhraseScanner
 from .segments import skip_preamble
 from .tokens import detok, known_word, number_at, stop_word
 
