@@ -458,3 +458,35 @@ PATH_MODIFIERS = ("big", "large", "small", "wide", "tight", "little", "circular"
 VERB_OBJECT_ROLES = {**dict.fromkeys(("circle", "orbit", "revolve", "loop"), "around"),
                      **dict.fromkeys(("chase", "follow", "approach", "reach"), "end"), "leave": "start",
                      **dict.fromkeys(("cross", "pass", "traverse", "enter", "climb", "descend"), "statics")}
+# Nouns that name no kind of object: True where the word means all of them ("things", "everything").
+GENERIC_NOUNS = {"object": False, "thing": False, "item": False, "objects": True, "things": True, "items": True,
+                 "everything": True, "stuff": True}
+# "its motion", "their speed": a possessive standing alone as a noun phrase before these.
+POSSESSIVE_ATTRIBUTES = ("motion", "movement", "direction", "speed", "color", "path", "trajectory")
+# "this one", "that's", "this color": a demonstrative is an edit target before these.
+PRONOUN_ATTRIBUTES = ("'s", "motion", "movement", "direction", "speed", "color", "path", "one", "ones")
+# "the whole scene", "the entire world": everything.
+SCENE_WORDS = ("scene", "whole", "entire", "world")
+# The verbs an edit operation starts with, by the reader that reads them (rules/edits.py).
+EDIT_VERB_GROUPS: dict[str, tuple[str, ...]] = {
+    "camera_decl": ("__camera__",),  # a camera description in an edit segment ("the camera pans left")
+    "make": ("make", "let", "have", "turn", "get"),
+    "paint": ("paint", "color", "colour", "recolor", "recolour", "dye", "colorize", "recolorize", "shade"),
+    "tint": ("tint",),
+    "change": ("change", "set", "switch", "alter", "apply"),
+    "give": ("give",),
+    "add": ("add",),
+    "darken": ("darken", "dim", "blacken"),
+    "brighten": ("brighten", "lighten", "whiten"),
+    "redden": ("redden",),
+    "remove": ("delete", "remove", "erase", "eliminate", "discard", "getridof", "hide", "clear", "drop", "wipe"),
+    "take": ("take",),
+    "extract": ("extract", "isolate", "segment", "separate", "single", "pull", "cut", "keep", "show", "only"),
+    "reverse": ("reverse", "invert", "flip"),
+    "stop": ("stop", "halt", "freeze", "pause"),
+    "speed": ("speed", "slow", "accelerate", "decelerate", "double", "halve", "triple", "quadruple", "increase",
+              "decrease", "reduce"),
+    "camera": ("orbit", "circle", "rotate", "pan", "zoom", "dolly"),
+    "move": ("move", "send", "steer", "direct", "guide", "redirect", "bounce", "zigzag", "go", "drive", "fly", "roll",
+             "run", "swim", "sail", "head"),
+}

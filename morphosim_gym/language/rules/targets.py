@@ -6,8 +6,9 @@ from ...errors import CommandError
 from ..grounding import SceneItem, ground_noun, ground_noun_vocabulary, resolve_in_scene
 from ..plan import CameraSpec, ColorSpec, EditOp, Target, edit_op
 from ..vocabulary import singular
-from .edits import EditReader, TargetDraft
+from .edits import EditReader
 from .nouns import NounPhrase
+from .target_phrases import TargetDraft
 from .tokens import detok
 
 __all__ = ["target_from_hits", "TargetResolver"]

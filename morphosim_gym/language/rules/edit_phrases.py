@@ -1,0 +1,377 @@
+"""Edit phrases: the complements of edit verbs ("... blue", "... twice as fast", "... to the left") read
+into op drafts (dicts of `EditOp` fields, targets not yet resolved)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from ...errors import CommandError
+from ..colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
+from ..lexicon import (
+    ADDITIVE_COLORS,
+    BRIGHTER,
+    DARKER,
+    DIRECTION_WORDS,
+    FILLER,
+    LEFTOVER_OK,
+)
+from ..plan import CameraSpec, ColorSpec
+from .camera import read_camera
+from .motion import Predicate, combine_directions
+from .scanner import PhraseScanner
+from .target_phrases import TargetDraft, read_targets
+from .tokens import detok, known_word, number_at
+
+__all__ = ["EditPhrases"]
+
+
+class EditPhrases:
+    """Reads the parts of one edit segment; `EditReader` reads the whole segment with it."""
+
+    def __init__(self, toks: list[str]) -> None:
+        self.toks = toks
+        self.seg = detok(toks)
+
+    def fail(self, why: str) -> CommandError:
+        return CommandError(f"Could not understand the edit {self.seg!r}: {why}. Supported edits: recolour "
+                            f"('make the bus yellow', 'make it redder', 'make it darker'), remove ('delete the ball'), "
+                            f"extract ('extract the boat'), reverse ('reverse its motion'), redirect ('move the ball to "
+                            f"the left'), speed ('make the car twice as fast'), stop ('stop the dog'), camera "
+                            f"('orbit the camera clockwise', 'pan left', 'zoom in')")
+
+    def _targets(self, toks: list[str], required: bool = True) -> tuple[list[TargetDraft], int]:
+        """Parse "the fish and seaweed", "it", "all the balls", "everything", "the camera"."""
+        return read_targets(toks, self.fail, required)
+
+    def _no_leftover(self, rest: Sequence[str]) -> None:
+        """Words after the targets of remove/extract/reverse must be fillers ("from the scene"), so that
+        "delete everything except the ball" fails instead of deleting everything."""
+        extra = [w for w in rest if w not in LEFTOVER_OK]
+        if extra:
+            raise self.fail(f"could not read {' '.join(rest)!r} after what to edit")
+
+    # "make ..." -----------------------------------------------------------------------------------------------
+    def _make(self, rest: list[str], verb: str = "make") -> list[dict]:
+        # "make the color of X C", "make X's color C"
+        r = list(rest)
+        if r[:3] in (["the", "color", "of"], ["the", "colors", "of"]) or r[:2] == ["color", "of"]:
+            k = r.index("of")
+            targets, j = self._targets(r[k + 1:])
+            tail = r[k + 1 + j:]
+            return [self._recolor(targets, tail, assign=True)]
+        if r and r[0] == "the" and len(r) > 1 and r[1] == "camera" or r and r[0] == "camera":
+            return [self._camera_op(read_camera(r))]
+        targets, j = self._targets(r)
+        tail = r[j:]
+        if tail and tail[0] in ("color", "colors") and "of" not in tail[:1]:
+            tail = tail[1:]
+        return self._complement(targets, tail, verb)
+
+    def _complement(self, targets: list[TargetDraft], tail: list[str], verb: str) -> list[dict]:
+        tail = [x for x in tail if x not in ("be", "look", "become", "appear", "seem", "to", "please")] if not (
+            tail and tail[0] in ("to", "toward")) else tail
+        if not tail:
+            raise self.fail("nothing says what to change")
+        if any(t.kind == "camera" for t in targets):
+            return [self._camera_target_ops(targets, tail)]
+        t0 = tail[0]
+        if t0 in ("bigger", "smaller", "larger", "taller", "shorter", "wider", "thinner", "huge", "tiny", "big",
+                  "small", "large"):
+            raise self.fail("resizing objects is not supported")
+        if t0 in ("disappear", "vanish", "invisible", "gone", "hidden") or tail[:2] == ["go", "away"]:
+            return [dict(op="remove", targets=targets)]
+        if t0 in ("stop", "halt", "freeze", "still", "stationary", "static", "motionless", "pause") or tail[:2] in (
+                ["stand", "still"], ["stay", "still"], ["not", "move"], ["stay", "put"], ["come", "to"],
+                ["keep", "still"], ["stop", "moving"]):
+            return [dict(op="stop", targets=targets)]
+        if t0 in ("reverse", "backwards", "backward") or tail[-2:] == ["in", "reverse"] or tail[:2] in (["go", "back"], ["turn", "around"],
+                                                                       ["move", "backwards"], ["go", "backwards"],
+                                                                       ["move", "backward"], ["go", "backward"],
+                                                                       ["run", "backwards"]) \
+                or ("opposite" in tail and ("way" in tail or "direction" in tail)) or tail[-2:] == ["other", "way"]:
+            return [dict(op="reverse", targets=targets)]
+        # colour complements
+        op = self._colour_complement(targets, tail)
+        if op is not None:
+            return [op]
+        if verb == "turn" and (t0 in ("left", "right", "around") or t0 in DIRECTION_WORDS):
+            if t0 == "around":
+                return [dict(op="reverse", targets=targets)]
+            return self._motion_ops(targets, tail, verb="turn")
+        # motion complements: speed, direction, path
+        ops = self._motion_ops(targets, tail, verb=verb, allow_fail=True)
+        if ops:
+            return ops
+        col_word = next((x for x in tail if x.isalpha() and not known_word(x) and x not in FILLER), None)
+        if col_word is not None and len(tail) <= 3:
+            raise self.fail(f"unknown colour or change {col_word!r}; colours are the CSS names (e.g. red, navy, "
+                            f"lightblue, goldenrod) optionally after light/dark/pale/bright")
+        raise self.fail(f"could not read {' '.join(tail)!r}")
+
+    def _colour_complement(self, targets: list[TargetDraft], tail: list[str]) -> dict | None:
+        tail = [x for x in tail if x not in ("a", "an", "some", "into", "in", "colored", "painted", "look")]
+        if not tail:
+            return None
+        amount_mult = self._amount_mult(tail)
+        core = [x for x in tail if x not in ("slightly", "bit", "little", "much", "alot", "lot", "far", "way",
+                                               "somewhat", "tad", "even", "more", "less", "a", "lot") or x in (
+            "more", "less")]
+        if not core:
+            return None
+        # multiplicative
+        if core[0] in DARKER or core[0] in BRIGHTER:
+            f = DARKER.get(core[0]) or BRIGHTER[core[0]]
+            if core[0] in DARKER:
+                f = {1.0: f, 2.0: 0.4, 0.5: 0.8}[amount_mult]
+            else:
+                f = {1.0: f, 2.0: 2.0, 0.5: 1.25}[amount_mult]
+            return self._multiply(targets, f)
+        if core[:3] in (["half", "as", "bright"], ["half", "as", "light"]):
+            return self._multiply(targets, 0.5)
+        if core[:3] in (["twice", "as", "bright"], ["double", "as", "bright"]):
+            return self._multiply(targets, 2.0)
+        if len(core) >= 3 and number_at(core, 0) is not None and core[1] == "times" and core[2] in (
+                "brighter", "darker", "as"):
+            v = number_at(core, 0)[0]
+            if v <= 0:
+                raise self.fail("a brightness factor must be > 0")
+            return self._multiply(targets, float(v) if core[2] in ("brighter", "as") else 1.0 / v)
+        # additive
+        if core[0] in ADDITIVE_COLORS:
+            name = ADDITIVE_COLORS[core[0]]
+            return self._additive(targets, (name, color_rgb(name), 1), 0.3 * amount_mult)
+        if core[0] in ("more", "less") and len(core) > 1:
+            col = match_color(core, 1)
+            if col is not None:
+                return self._additive(targets, col, (0.3 if core[0] == "more" else -0.3) * amount_mult)
+            if core[1] in ("bright", "vivid", "vibrant", "dark", "light"):
+                bright = core[1] in ("bright", "vivid", "vibrant", "light")
+                up = core[0] == "more"
+                return self._multiply(targets, 1.5 if bright == up else 0.6)
+        # assign
+        col = match_color(core, 0)
+        if col is not None:
+            rest = [x for x in core[col[2]:] if x not in FILLER]
+            if rest and rest[0] in ("and",):
+                rest = []
+            if rest:
+                if any(x in ("tint", "tinge", "hue") for x in core):
+                    return self._additive(targets, col, 0.3 * amount_mult)
+                return None
+            if any(x in ("tint", "tinge") for x in tail):
+                return self._additive(targets, col, 0.3 * amount_mult)
+            return self._recolor(targets, [col[0]] if " " not in col[0] else col[0].split(), assign=True)
+        if core[0] in COLOR_MODIFIERS or core[0] in MODIFIER_SYNONYMS:
+            if len(core) > 1 and core[1].isalpha() and not known_word(core[1]):
+                raise self.fail(f"unknown colour {core[1]!r}; colours are the CSS names (e.g. red, navy, lightblue) "
+                                f"optionally after light/dark/pale/bright")
+        return None
+
+    @staticmethod
+    def _amount_mult(tail: Sequence[str]) -> float:
+        if any(x in ("much", "alot", "lot", "far", "way", "considerably") for x in tail):
+            return 2.0
+        if any(x in ("slightly", "bit", "little", "somewhat", "tad", "touch") for x in tail):
+            return 0.5
+        return 1.0
+
+    def _recolor(self, targets: list[TargetDraft], tail: list[str], assign: bool = True) -> dict:
+        tail = [x for x in tail if x not in ("to", "into", "in", "a", "an", "the", "color", "colour", "as", "well")]
+        col = match_color(tail, 0) if tail else None
+        if col is None:
+            word = next((x for x in tail if x not in FILLER), None)
+            if word is None:
+                raise self.fail("expected a colour (e.g. 'make the bus yellow')")
+            op = self._colour_complement(targets, tail)
+            if op is not None:
+                return op
+            raise self.fail(f"unknown colour {' '.join(tail)!r}; colours are the CSS names (e.g. red, navy, lightblue, "
+                            f"goldenrod) optionally after light/dark/pale/bright")
+        leftover = [x for x in tail[col[2]:] if x not in FILLER and x not in (",", "and", "please")]
+        if leftover:
+            raise self.fail(f"could not read {' '.join(tail)!r} as one colour")
+        return dict(op="recolor", targets=targets, mode="assign", color=ColorSpec(col[0], col[1]))
+
+    @staticmethod
+    def _additive(targets: list[TargetDraft], col: tuple, amount: float) -> dict:
+        amount = max(-1.0, min(1.0, amount))
+        delta = tuple(round(amount * c, 6) + 0.0 for c in col[1])
+        return dict(op="recolor", targets=targets, mode="additive", color=ColorSpec(col[0], col[1]), delta=delta)
+
+    def _multiply(self, targets: list[TargetDraft], f: float) -> dict:
+        if f <= 0:
+            raise self.fail("a brightness factor must be > 0")
+        f = round(f, 6)
+        return dict(op="recolor", targets=targets, mode="multiplicative", factor_rgb=(f, f, f))
+
+    # change / set -----------------------------------------------------------------------------------------
+    def _change(self, rest: list[str]) -> list[dict]:
+        r = list(rest)
+        if "camera" in r[:3]:
+            return [self._camera_op(read_camera(r))]
+        attr = None
+        # "the color of X to C" / "X's color to C" / "X to C"
+        if r[:1] == ["the"] and len(r) > 2 and r[1] in ("color", "colors", "direction", "speed", "motion", "path",
+                                                        "movement", "trajectory", "velocity") and r[2] == "of":
+            attr = r[1]
+            targets, j = self._targets(r[3:])
+            tail = r[3 + j:]
+        else:
+            targets, j = self._targets(r)
+            tail = r[j:]
+            if tail and tail[0] in ("color", "colors", "direction", "speed", "motion", "path", "movement",
+                                    "trajectory", "velocity"):
+                attr = tail[0]
+                tail = tail[1:]
+        while tail and tail[0] in ("to", "into", "a", "an", "from", "so", "that", "it", "is"):
+            if tail[0] == "from":  # "change X from red to blue"
+                k = tail.index("to") if "to" in tail else len(tail)
+                tail = tail[k:]
+                continue
+            tail = tail[1:]
+        if attr in ("color", "colors") or (attr is None and tail and (match_color(tail) is not None
+                                                                      or tail[0] in ADDITIVE_COLORS)):
+            return [self._recolor(targets, tail, assign=True)]
+        if attr in ("direction", "motion", "path", "movement", "trajectory", "velocity"):
+            if not tail or tail in (["around"],) or tail[0] in ("opposite", "reverse", "reversed", "backwards"):
+                return [dict(op="reverse", targets=targets)]
+            return self._motion_ops(targets, tail, verb="change")
+        if attr == "speed":
+            if not tail:
+                raise self.fail("expected a new speed (e.g. 'change the speed of the car to slow')")
+            return self._motion_ops(targets, tail, verb="change", speed_only=True)
+        return self._complement(targets, tail, "change")
+
+    # speed --------------------------------------------------------------------------------------------------
+    def _speed_verb(self, w: str, rest: list[str]) -> dict:
+        r = list(rest)
+        factor: float | None = None
+        if w in ("speed", "slow"):
+            if r and r[0] in ("up", "down"):
+                r = r[1:]
+            elif r and r[-1] in ("up", "down"):
+                r = r[:-1]
+            factor = 2.0 if w == "speed" else 0.5
+        elif w in ("accelerate", "increase"):
+            factor = 2.0
+        elif w in ("decelerate", "decrease", "reduce"):
+            factor = 0.5
+        elif w == "double":
+            factor = 2.0
+        elif w == "halve":
+            factor = 0.5
+        elif w == "triple":
+            factor = 3.0
+        elif w == "quadruple":
+            factor = 4.0
+        r = [x for x in r if x not in ("the", "speed", "of", "'s", "velocity", "pace")] if (
+            "speed" in r or "of" in r or "velocity" in r or "pace" in r) else r
+        mult = self._amount_mult(r)
+        if w in ("speed", "accelerate", "increase") and mult != 1.0:
+            factor = {2.0: 3.0, 0.5: 1.25}[mult]
+        if w in ("slow", "decelerate", "decrease", "reduce") and mult != 1.0:
+            factor = {2.0: round(1 / 3, 6), 0.5: 0.8}[mult]
+        r = [x for x in r if x not in ("a", "bit", "little", "lot", "alot", "much", "slightly", "way", "far")]
+        by = None
+        if "by" in r:
+            k = r.index("by")
+            by = r[k + 1:]
+            r = r[:k]
+        if not r:
+            r = ["it"]
+        targets, j = self._targets(r)
+        if by:
+            num = number_at(by, 0)
+            if num is not None and len(by) > num[1] and by[num[1]] == "percent":
+                p = num[0] / 100.0
+                factor = 1 + p if w in ("speed", "accelerate", "increase") else 1 - p
+            elif num is not None and len(by) > num[1] and by[num[1]] in ("times",):
+                factor = float(num[0]) if w in ("speed", "accelerate", "increase") else (
+                    1.0 / num[0] if num[0] else 0.0)
+            elif by[:1] == ["half"]:
+                factor = 1.5 if w in ("speed", "accelerate", "increase") else 0.5
+        if factor is None or factor <= 0:
+            raise self.fail("the speed factor must be > 0 (say 'stop' to stop a motion)")
+        if targets and targets[0].kind == "camera":
+            return dict(op="speed", targets=targets, factor=round(factor, 6))
+        return dict(op="speed", targets=targets, factor=round(factor, 6))
+
+    # motion ops ----------------------------------------------------------------------------------------------
+    def _motion_ops(self, targets: list[TargetDraft], tail: list[str], implied: str | None = None,
+                    verb: str | None = None, allow_fail: bool = False, speed_only: bool = False) -> list[dict]:
+        pred = Predicate()
+        scanner = PhraseScanner(tail, edit=True)
+        scanner.scan(0, len(tail), pred)
+        if tail and tail[0] in ("to", "at") and pred.speed is None and pred.factor is None and speed_only:
+            pass
+        if speed_only and pred.speed is None and pred.factor is None:
+            num = number_at(tail, 0)
+            if tail[:1] == ["half"]:
+                pred.factor = 0.5
+            elif tail[:1] in (["double"], ["twice"]):
+                pred.factor = 2.0
+            elif num is not None:
+                if num[0] <= 0:
+                    raise self.fail("the speed factor must be > 0 (say 'stop' to stop a motion)")
+                pred.factor = float(num[0])
+        if implied and not pred.path:
+            pred.path = implied
+        ops: list[dict] = []
+        if pred.reverse and not (pred.dirs or pred.to_side or pred.end):
+            return [dict(op="reverse", targets=targets)]
+        direction = combine_directions(pred, tail)
+        path = None
+        kinds = [k for _, k in pred.verbs]
+        if pred.path:
+            path = pred.path
+        elif pred.clockwise is not None or pred.around is not None:
+            path = "circle"
+        elif pred.oscillate:
+            path = "oscillate"
+            direction = direction or pred.oscillate_axis
+        else:
+            for k in ("zigzag", "circle", "bounce", "oscillate"):
+                if k in kinds:
+                    path = k
+                    break
+        if ("stop" in kinds or pred.stationary) and not (direction or path):
+            return [dict(op="stop", targets=targets)]
+        if pred.negated and ("move" in kinds or not kinds):
+            return [dict(op="stop", targets=targets)]
+        if direction is not None or path is not None or pred.end is not None or pred.around is not None:
+            d: dict = dict(op="redirect", targets=targets, direction_world=direction, path=path,
+                           clockwise=pred.clockwise if path == "circle" else None)
+            if pred.end is not None:
+                d["end_np"] = pred.end
+            if pred.around is not None:
+                d["around_np"] = pred.around
+            ops.append(d)
+        if pred.factor is not None:
+            ops.append(dict(op="speed", targets=list(targets), factor=pred.factor))
+        elif pred.speed is not None:
+            ops.append(dict(op="speed", targets=list(targets), speed=pred.speed, speed_word=pred.speed_word))
+        if not ops:
+            if allow_fail:
+                return []
+            raise self.fail("expected a direction, path or speed (e.g. 'move the ball to the left')")
+        return ops
+
+    # camera --------------------------------------------------------------------------------------------------
+    def _camera_op(self, cam: dict) -> dict:
+        spec = CameraSpec(motion=cam.get("motion", "fixed"), direction=cam.get("direction"),
+                          speed=cam.get("speed", 1.0), speed_word=cam.get("speed_word"))
+        d = dict(op="camera", camera=spec)
+        if cam.get("target_np") is not None:
+            d["camera_target_np"] = cam["target_np"]
+        return d
+
+    def _camera_target_ops(self, targets: list[TargetDraft], tail: list[str]) -> dict:
+        cam_t = [t for t in targets if t.kind == "camera"]
+        pred = Predicate()
+        PhraseScanner(tail, edit=True).scan(0, len(tail), pred)
+        if pred.factor is not None:
+            return dict(op="speed", targets=cam_t, factor=pred.factor)
+        if pred.reverse:
+            return dict(op="reverse", targets=cam_t)
+        return self._camera_op(read_camera(["camera"] + tail))
+
