@@ -490,3 +490,13 @@ EDIT_VERB_GROUPS: dict[str, tuple[str, ...]] = {
     "move": ("move", "send", "steer", "direct", "guide", "redirect", "bounce", "zigzag", "go", "drive", "fly", "roll",
              "run", "swim", "sail", "head"),
 }
+# Camera verbs that move it along its view axis; the ones that say which way.
+CAMERA_DOLLY_VERBS = ("zoom", "zooms", "zooming", "dolly", "dollies", "dollying", "push", "pushes", "pushing", "pull",
+                      "pulls", "pulling", "closer", "nearer", "approaches", "approach", "approaching", "retreats",
+                      "backs", "recedes")
+CAMERA_DOLLY_IN = ("closer", "nearer", "approaches", "approach", "approaching")
+CAMERA_DOLLY_OUT = ("retreats", "backs", "recedes")
+# Words skipped before a clause's subject ("there is a ball", "we see a dog", "with a cat").
+CLAUSE_LEADS = (",", "there", "is", "are", "we", "see", "you", "can", "shows", "show", "with", "here")
+# Words between a modal and the change it asks for ("should be", "is now", "has to be made").
+MODAL_FILLERS = ("to", "be", "now", "been", "made", "instead", "changed", "turned", "colored")

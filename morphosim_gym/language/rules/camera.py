@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Sequence
 
 from ..lexicon import (
     CAMERA_BOUNDARY,
     CAMERA_DOLLY,
+    CAMERA_DOLLY_IN,
+    CAMERA_DOLLY_OUT,
+    CAMERA_DOLLY_VERBS,
     CAMERA_FIXED,
     CAMERA_ORBIT,
     CAMERA_PAN,
@@ -16,7 +20,8 @@ from ..lexicon import (
     verb_info,
 )
 from ..vocabulary import noun_to_category, word_to_setting
-from .nouns import clause_boundary, parse_np
+from .dispatch import WordTable
+from .nouns import NounPhrase, clause_boundary, parse_np
 from .tokens import match_phrase
 
 __all__ = ["extract_camera_clauses", "read_camera"]
@@ -68,113 +73,165 @@ def extract_camera_clauses(toks: list[str]) -> tuple[list[str], list[list[str]]]
     return rest, cams
 
 
+@dataclass
+class _CameraDraft:
+    motion: str | None = None
+    direction: str | None = None
+    speed: tuple[float, str] | None = None  # (factor, words)
+    target_np: NounPhrase | None = None
+    settings: list[str] = field(default_factory=list)
+
+
 def read_camera(toks: Sequence[str]) -> dict:
-    """Camera motion, direction, speed and target from a camera clause."""
-    out: dict = {"motion": "fixed"}
+    """Camera motion, direction, speed and target from a camera clause (a `WordTable` of small
+    readers keyed by the word each starts with)."""
     words = list(toks)
-    motion = None
-    direction = None
-    target_np = None
-    settings: list[str] = []
+    cam = _CameraDraft()
     i = 0
-    n = len(words)
-    while i < n:
-        w = words[i]
-        sp = match_phrase(words, i, SPEED_PHRASES)
-        if sp is not None:
-            out["speed"], out["speed_word"] = sp[0], " ".join(words[i:i + sp[1]])
-            i += sp[1]
-            continue
-        if w in CLOCKWISE_WORDS:
-            direction = "clockwise" if CLOCKWISE_WORDS[w] else "counterclockwise"
-            motion = motion or "orbit"
-            i += 1
-            continue
-        if w in CAMERA_ORBIT and w not in ("turns", "turn"):
-            motion = "orbit"
-            j = i + 1
-            while j < n and words[j] in ("around", "round", "about", "slowly", "quickly", "all", "the", "way"):
-                if words[j] in ("the", "all", "way"):
-                    break
-                j += 1
-            np_ = parse_np(words, j) if j < n else None
-            if np_ is not None and np_.kind in ("category", "unknown", "setting", "pronoun"):
-                target_np = np_
-                i = np_.end
-                continue
-            if np_ is not None:
-                if np_.kind == "setting":
-                    settings.append(np_.category)
-                i = np_.end
-                continue
-            i += 1
-            continue
-        if w in CAMERA_PAN and motion != "orbit":
-            motion = "pan"
-            i += 1
-            continue
-        if w in ("zoom", "zooms", "zooming", "dolly", "dollies", "dollying", "push", "pushes", "pushing", "pull",
-                 "pulls", "pulling", "closer", "nearer", "approaches", "approach", "approaching", "retreats",
-                 "backs", "recedes") and motion != "orbit":
-            motion = "dolly"
-            if w in ("closer", "nearer", "approaches", "approach", "approaching"):
-                direction = "in"
-            elif w in ("retreats", "backs", "recedes"):
-                direction = "out"
-            i += 1
-            continue
-        if w in ("in", "forward", "forwards", "closer") and motion == "dolly":
-            direction = "in"
-            i += 1
-            continue
-        if w in ("out", "back", "backward", "backwards", "away") and motion == "dolly":
-            direction = "out"
-            i += 1
-            continue
-        if w in ("left", "right", "leftward", "rightward", "leftwards", "rightwards"):
-            if motion in (None, "pan", "fixed"):
-                motion = "pan"
-                direction = "left" if w.startswith("left") else "right"
-            i += 1
-            continue
-        if w in ("moves", "move", "moving", "goes", "go") and i + 1 < n and words[i + 1] in ("closer", "nearer", "in",
-                                                                                              "forward", "toward"):
-            motion, direction = "dolly", "in"
-            i += 2
-            continue
-        if w in ("moves", "move", "moving", "goes", "go") and i + 1 < n and words[i + 1] in ("away", "back", "out",
-                                                                                              "backward", "backwards"):
-            motion, direction = "dolly", "out"
-            i += 2
-            continue
-        if w in CAMERA_FIXED and motion is None:
-            motion = "fixed"
-            i += 1
-            continue
-        if w in ("not", "never") and i + 1 < n and words[i + 1] in ("move", "moves", "moving"):
-            motion = "fixed"
-            i += 2
-            continue
-        if w in ("on", "in", "across", "over", "above", "at", "inside") and i + 1 < n:
-            np_ = parse_np(words, i + 1)
-            if np_ is not None and (np_.kind == "setting" or np_.head == "table"):
-                settings.extend(np_.settings)
-                settings.append(np_.category if np_.kind == "setting" else "table")
-                i = np_.end
-                continue
-        s = word_to_setting(w)
-        if s is not None and noun_to_category(w) is None:
-            settings.append(s)
-        i += 1
-    out["motion"] = motion or "fixed"
+    while i < len(words):
+        for reader in _TABLE.handlers_for(words[i]):
+            k = reader(words, i, cam)
+            if k is not None:
+                i = k
+                break
+    out: dict = {"motion": cam.motion or "fixed"}
+    if cam.speed is not None and out["motion"] != "fixed":
+        out["speed"], out["speed_word"] = cam.speed
+    direction, target_np = cam.direction, cam.target_np
     if out["motion"] == "fixed":
-        direction = None
-        target_np = None
-        out.pop("speed", None)
-        out.pop("speed_word", None)
+        direction = target_np = None
     if out["motion"] == "pan" and direction not in ("left", "right", None):
         direction = None
     out["direction"] = direction
     out["target_np"] = target_np
-    out["settings"] = settings
+    out["settings"] = cam.settings
     return out
+
+
+_TABLE = WordTable()  # readers (words, i, draft) -> index after what they read, or None
+
+
+@_TABLE.on({p[0] for p in SPEED_PHRASES})
+def _speed(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    sp = match_phrase(words, i, SPEED_PHRASES)
+    if sp is None:
+        return None
+    cam.speed = (sp[0], " ".join(words[i:i + sp[1]]))
+    return i + sp[1]
+
+
+@_TABLE.on(CLOCKWISE_WORDS)
+def _clockwise(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    cam.direction = "clockwise" if CLOCKWISE_WORDS[words[i]] else "counterclockwise"
+    cam.motion = cam.motion or "orbit"
+    return i + 1
+
+
+@_TABLE.on(set(CAMERA_ORBIT) - {"turns", "turn"})
+def _orbit(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    """ "orbits (around) the table", "circles it", "rotates"."""
+    cam.motion = "orbit"
+    j = i + 1
+    while j < len(words) and words[j] in ("around", "round", "about", "slowly", "quickly"):
+        j += 1
+    np_ = parse_np(words, j) if j < len(words) else None
+    if np_ is None:
+        return i + 1
+    if np_.kind in ("category", "unknown", "setting", "pronoun"):
+        cam.target_np = np_
+    return np_.end
+
+
+@_TABLE.on(CAMERA_PAN)
+def _pan(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if cam.motion == "orbit":
+        return None
+    cam.motion = "pan"
+    return i + 1
+
+
+@_TABLE.on(CAMERA_DOLLY_VERBS)
+def _dolly(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    """ "zooms", "pushes", "approaches" (in), "retreats" (out)."""
+    if cam.motion == "orbit":
+        return None
+    cam.motion = "dolly"
+    w = words[i]
+    if w in CAMERA_DOLLY_IN:
+        cam.direction = "in"
+    elif w in CAMERA_DOLLY_OUT:
+        cam.direction = "out"
+    return i + 1
+
+
+@_TABLE.on("in", "forward", "forwards", "closer")
+def _dolly_in(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if cam.motion != "dolly":
+        return None
+    cam.direction = "in"
+    return i + 1
+
+
+@_TABLE.on("out", "back", "backward", "backwards", "away")
+def _dolly_out(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if cam.motion != "dolly":
+        return None
+    cam.direction = "out"
+    return i + 1
+
+
+@_TABLE.on("left", "right", "leftward", "rightward", "leftwards", "rightwards")
+def _pan_side(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if cam.motion in (None, "pan", "fixed"):
+        cam.motion = "pan"
+        cam.direction = "left" if words[i].startswith("left") else "right"
+    return i + 1
+
+
+@_TABLE.on("moves", "move", "moving", "goes", "go")
+def _moves(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    """ "moves closer", "goes back": a dolly."""
+    nxt = words[i + 1] if i + 1 < len(words) else ""
+    if nxt in ("closer", "nearer", "in", "forward", "toward"):
+        cam.motion, cam.direction = "dolly", "in"
+    elif nxt in ("away", "back", "out", "backward", "backwards"):
+        cam.motion, cam.direction = "dolly", "out"
+    else:
+        return None
+    return i + 2
+
+
+@_TABLE.on(CAMERA_FIXED)
+def _fixed(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if cam.motion is not None:
+        return None
+    cam.motion = "fixed"
+    return i + 1
+
+
+@_TABLE.on("not", "never")
+def _not_moving(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    if not (i + 1 < len(words) and words[i + 1] in ("move", "moves", "moving")):
+        return None
+    cam.motion = "fixed"
+    return i + 2
+
+
+@_TABLE.on("on", "in", "across", "over", "above", "at", "inside")
+def _place(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    """ "on the table", "over the water": the setting."""
+    np_ = parse_np(words, i + 1) if i + 1 < len(words) else None
+    if np_ is None or not (np_.kind == "setting" or np_.head == "table"):
+        return None
+    cam.settings.extend(np_.settings)
+    cam.settings.append(np_.category if np_.kind == "setting" else "table")
+    return np_.end
+
+
+@_TABLE.any_word
+def _other_word(words: list[str], i: int, cam: _CameraDraft) -> int | None:
+    w = words[i]
+    s = word_to_setting(w)
+    if s is not None and noun_to_category(w) is None:
+        cam.settings.append(s)
+    return i + 1

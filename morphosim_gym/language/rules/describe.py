@@ -8,6 +8,7 @@ from typing import Sequence
 from ...errors import CommandError
 from ..grounding import ground_noun, ground_noun_vocabulary
 from ..lexicon import (
+    CLAUSE_LEADS,
     COLLECTIVE_NOUNS,
     CONJ,
     DETS,
@@ -53,6 +54,49 @@ def number_agreement(subjects: list[NounPhrase], toks: Sequence[str], i: int) ->
         subjects[0].plural = False  # also "the busses is moving" (a typo either way: trust the verb)
 
 
+def _subjects(toks: list[str], i: int) -> tuple[list[NounPhrase], int]:
+    """The subject noun phrases at i ("a ball and a cube", "the dog, the cat") and the index after them."""
+    n = len(toks)
+    subjects: list[NounPhrase] = []
+    while i < n:
+        np_ = parse_np(toks, i)
+        if np_ is None:
+            break
+        subjects.append(np_)
+        i = np_.end
+        if i < n and toks[i] == "'s":
+            break
+        if i < n and toks[i] in ("and", ",") and i + 1 < n:
+            j = i + 1
+            if toks[j] == "and":
+                j += 1
+            nxt = parse_np(toks, j) if j < n else None
+            if nxt is not None and toks[j] not in VERBS:
+                i = j
+                continue
+        break
+    return subjects, i
+
+
+def _only_unknown_words(subjects: list[NounPhrase], pred: Predicate) -> bool:
+    """Unknown bare words as subjects, and no verb, direction, side, setting or path understood."""
+    return bool(subjects) and all(np_.kind == "unknown" and np_.det is None and np_.count is None
+                                  for np_ in subjects) and not (pred.verbs or pred.dirs or pred.from_side
+                                                                or pred.to_side or pred.settings or pred.path)
+
+
+def _clause_speed(subjects: list[NounPhrase], pred: Predicate) -> tuple[float | None, str | None]:
+    """A clause's speed: its speed words, else a relative factor, else a subject's ("a fast car")."""
+    if pred.speed is not None:
+        return pred.speed, pred.speed_word
+    if pred.factor is not None:
+        return pred.factor, "relative"
+    for np_ in subjects:
+        if np_.speed is not None:
+            return np_.speed
+    return None, None
+
+
 class DescriptionReader:
     """Reads description segments into the parse state of `RuleParser` (a mixin of it)."""
 
@@ -64,40 +108,19 @@ class DescriptionReader:
         n = len(toks)
         any_clause = False
         while i < n:
-            while i < n and (toks[i] in CONJ or toks[i] in (",", "there", "is", "are", "we", "see", "you", "can",
-                                                               "shows", "show", "with", "here")):
+            while i < n and (toks[i] in CONJ or toks[i] in CLAUSE_LEADS):
                 i += 1
             if i >= n:
                 break
-            subjects: list[NounPhrase] = []
-            while i < n:
-                np_ = parse_np(toks, i)
-                if np_ is None:
-                    break
-                subjects.append(np_)
-                i = np_.end
-                if i < n and toks[i] == "'s":
-                    break
-                if i < n and toks[i] in ("and", ",") and i + 1 < n:
-                    j = i + 1
-                    if toks[j] == "and":
-                        j += 1
-                    nxt = parse_np(toks, j) if j < n else None
-                    if nxt is not None and toks[j] not in VERBS:
-                        i = j
-                        continue
-                break
+            subjects, i = _subjects(toks, i)
             pred = Predicate()
-            scanner = PhraseScanner(toks)
-            j = scanner.scan(i, n, pred, boundary=lambda k: clause_boundary(toks, k))
+            j = PhraseScanner(toks).scan(i, n, pred, boundary=lambda k: clause_boundary(toks, k))
             if j == i and not subjects:
                 # nothing readable here: skip a word (it is reported if nothing at all is understood)
                 pred.unknown.append(toks[i])
                 i += 1
                 continue
-            if subjects and all(np_.kind == "unknown" and np_.det is None and np_.count is None
-                                for np_ in subjects) and not (pred.verbs or pred.dirs or pred.from_side
-                                                              or pred.to_side or pred.settings or pred.path):
+            if _only_unknown_words(subjects, pred):
                 # unknown words with no article and nothing else understood: not a description
                 i = max(j, i + 1)
                 continue
@@ -119,41 +142,53 @@ class DescriptionReader:
                                + EXAMPLES[0] + " or an edit such as " + EXAMPLES[2])
 
     def _apply_clause(self, subjects: list[NounPhrase], pred: Predicate, toks: list[str]) -> bool:
+        """Add a clause's subjects, landmarks and motion to the parse state; False when it says
+        nothing about objects or settings."""
         settings = list(pred.settings)
         for np_ in subjects:
             settings.extend(np_.settings)
-        objs: list[ObjectDraft] = []
-        for np_ in subjects:
-            if np_.kind == "setting":
-                if np_.head == "table" or np_.category:
-                    settings.append(np_.category)
-                continue
-            if np_.kind in ("viewer", "camera", "generic"):
-                continue
-            if np_.kind == "all":
-                continue
-            if np_.kind == "pronoun":
-                if not self.salience:
-                    raise CommandError(f"Could not tell what {np_.head!r} refers to in {detok(toks)!r}: name the "
-                                       f"object first")
-                objs.append(self._obj(self.salience[-1]))
-                continue
-            objs.append(self._object_from_np(np_, subject=True))
+        objs = self._subject_objects(subjects, settings, toks)
         self.settings.extend(settings)
         if not objs and pred.with_nps and pred.has_motion():
             # "an underwater scene with a fish swimming to the right"
             objs = [self._object_from_np(np_, subject=True) for np_ in pred.with_nps]
             pred.statics = [np_ for np_ in pred.statics if np_ not in pred.with_nps]
         if not objs:
-            if pred.has_motion() and not settings and subjects == []:
-                if self.salience and pred.verbs:  # subjectless continuation ("... and bounces")
-                    objs = [self._obj(self.salience[-1])]
-                else:
-                    return False
-            elif settings:
-                return True
-            else:
+            if not (pred.has_motion() and not settings and subjects == []):
+                return bool(settings)
+            if not (self.salience and pred.verbs):
                 return False
+            objs = [self._obj(self.salience[-1])]  # subjectless continuation ("... and bounces")
+        self._add_statics(pred)
+        for key in ("start", "end", "around"):
+            np_ = getattr(pred, key)
+            if np_ is not None and np_.kind == "unknown" and np_.head in SPATIAL_NOUNS:
+                setattr(pred, key, None)
+        if pred.has_motion():
+            self._add_motion(objs, subjects, pred, toks)
+        else:
+            for o in objs:
+                self._touch(o.name)
+        return True
+
+    def _subject_objects(self, subjects: list[NounPhrase], settings: list[str], toks: list[str]) -> list[ObjectDraft]:
+        """The objects the subjects name (settings they name go to `settings`)."""
+        objs: list[ObjectDraft] = []
+        for np_ in subjects:
+            if np_.kind == "setting":
+                if np_.head == "table" or np_.category:
+                    settings.append(np_.category)
+            elif np_.kind == "pronoun":
+                if not self.salience:
+                    raise CommandError(f"Could not tell what {np_.head!r} refers to in {detok(toks)!r}: name the "
+                                       f"object first")
+                objs.append(self._obj(self.salience[-1]))
+            elif np_.kind not in ("viewer", "camera", "generic", "all"):
+                objs.append(self._object_from_np(np_, subject=True))
+        return objs
+
+    def _add_statics(self, pred: Predicate) -> None:
+        """Static objects of a clause ("past a tree", "a dog fetches a ball")."""
         for np_ in pred.statics:
             if np_.kind == "category" or (np_.kind == "unknown" and np_.head not in SPATIAL_NOUNS):
                 try:
@@ -162,21 +197,10 @@ class DescriptionReader:
                     if np_.kind == "category":
                         raise
                     # an incidental place word that is no object ("across the glassy surface"): skip it
-        for key in ("start", "end", "around"):
-            np_ = getattr(pred, key)
-            if np_ is not None and np_.kind == "unknown" and np_.head in SPATIAL_NOUNS:
-                setattr(pred, key, None)
-        if not pred.has_motion():
-            for o in objs:
-                self._touch(o.name)
-            return True
-        speed = pred.speed
-        speed_word = pred.speed_word
-        if pred.factor is not None and speed is None:
-            speed, speed_word = pred.factor, "relative"
-        for np_ in subjects:
-            if np_.speed is not None and speed is None:
-                speed, speed_word = np_.speed
+
+    def _add_motion(self, objs: list[ObjectDraft], subjects: list[NounPhrase], pred: Predicate,
+                    toks: list[str]) -> None:
+        speed, speed_word = _clause_speed(subjects, pred)
         direction = combine_directions(pred, toks)
         path = path_of(pred, direction)
         if path == "stop":
@@ -191,16 +215,15 @@ class DescriptionReader:
         for o in objs:
             if o.name in (start, end_, around):
                 raise CommandError(f"Could not understand {detok(toks)!r}: {o.noun!r} cannot move to or around itself")
-            m = dict(target=o.name, path=path, direction_world=direction,
-                     speed=speed if speed is not None else 1.0, speed_word=speed_word if speed is not None else None,
-                     start=start, end=end_, around=around if path == "circle" else None,
-                     clockwise=pred.clockwise if path == "circle" else None)
+            m = {"target": o.name, "path": path, "direction_world": direction,
+                 "speed": speed if speed is not None else 1.0, "speed_word": speed_word if speed is not None else None,
+                 "start": start, "end": end_, "around": around if path == "circle" else None,
+                 "clockwise": pred.clockwise if path == "circle" else None}
             old = self.motions.get(o.name)
             if old is not None:
                 m = merge_motion(old, m)
             self.motions[o.name] = m
             self._touch(o.name)
-        return True
 
     def _touch(self, name: str) -> None:
         if name in self.salience:

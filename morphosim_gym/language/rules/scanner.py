@@ -2,16 +2,15 @@
 `Predicate`.
 
 Each construction is a small handler ``(scanner, i, pred) -> index after it, or None`` registered
-with the words it can start with (`None`: any word; the handler then tests the word itself). At
-each position the scanner tries, in registration order, the handlers of the word there (a table
-cached per word) and takes the first that reads something; a word no handler reads is skipped
-(and noted in ``pred.unknown`` when the parser does not know it).
+in a `WordTable` with the words it can start with (or for any word: the handler then tests the word
+itself). At each position the scanner tries, in registration order, the handlers of the word there
+and takes the first that reads something; the last handler skips any word (noting it in
+``pred.unknown`` when the parser does not know it).
 """
 
 from __future__ import annotations
 
-import functools
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Sequence
 
 from ..lexicon import (
     AUX,
@@ -33,16 +32,16 @@ from ..lexicon import (
     verb_info,
 )
 from ..vocabulary import noun_to_category, word_to_setting
+from .dispatch import NUMBER, WordTable
 from .motion import Predicate, direction_of, side_at
-from .nouns import NounPhrase, parse_np
+from .nouns import parse_np
 from .speeds import relative_speed
-from .tokens import is_number, known_word, match_phrase
+from .tokens import known_word, match_phrase
 
 __all__ = ["PhraseScanner"]
 
-Handler = Callable[["PhraseScanner", int, Predicate], "int | None"]
-_HANDLERS: list[tuple[frozenset[str] | None, Handler]] = []
-_NUMBER = "<number>"  # the key digits ("3", "2.5") are registered under
+_TABLE = WordTable()  # handlers (scanner, i, pred) -> index after what they read, or None
+_on, _any_word = _TABLE.on, _TABLE.any_word
 
 
 class PhraseScanner:
@@ -60,7 +59,7 @@ class PhraseScanner:
         while i < end:
             if boundary is not None and boundary(i):
                 break
-            for handler in _handlers_for(self.span[i]):
+            for handler in _TABLE.handlers_for(self.span[i]):
                 k = handler(self, i, pred)
                 if k is not None:
                     i = k
@@ -75,38 +74,10 @@ class PhraseScanner:
         return self.span[k] if k < len(self.span) else ""
 
 
-@functools.lru_cache(maxsize=8192)
-def _handlers_for(word: str) -> tuple[Handler, ...]:
-    key = _NUMBER if is_number(word) else word
-    return tuple(h for keys, h in _HANDLERS if keys is None or key in keys)
-
-
-def _on(*words: str | Iterable[str]) -> Callable[[Handler], Handler]:
-    """Register a handler for the words it can start with (strings or collections of them)."""
-    keys: set[str] = set()
-    for w in words:
-        keys.update([w] if isinstance(w, str) else w)
-
-    def register(fn: Handler) -> Handler:
-        _HANDLERS.append((frozenset(keys), fn))
-        return fn
-    return register
-
-
-def _any_word(fn: Handler) -> Handler:
-    """Register a handler that decides from the word itself (a vocabulary lookup)."""
-    _HANDLERS.append((None, fn))
-    return fn
-
-
-def _np_end(np_: NounPhrase | None) -> int | None:
-    return np_.end if np_ is not None else None
-
-
 # -- speeds ---------------------------------------------------------------------------------------------
 
 
-@_on(RELATIVE_SPEED_STARTS, _NUMBER)
+@_on(RELATIVE_SPEED_STARTS, NUMBER)
 def _relative(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
     """ "twice as fast", "3 times faster", "50 percent slower", "faster"."""
     hit = relative_speed(sc.span, i)
