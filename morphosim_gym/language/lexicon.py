@@ -500,3 +500,22 @@ CAMERA_DOLLY_OUT = ("retreats", "backs", "recedes")
 CLAUSE_LEADS = (",", "there", "is", "are", "we", "see", "you", "can", "shows", "show", "with", "here")
 # Words between a modal and the change it asks for ("should be", "is now", "has to be made").
 MODAL_FILLERS = ("to", "be", "now", "been", "made", "instead", "changed", "turned", "colored")
+# Edit complements ("make X ..."): words dropped before them, and the states they can name.
+COPULAS = ("be", "look", "become", "appear", "seem", "to", "please")
+RESIZE_WORDS = ("bigger", "smaller", "larger", "taller", "shorter", "wider", "thinner", "huge", "tiny", "big", "small",
+                "large")
+REMOVE_COMPLEMENTS = ("disappear", "vanish", "invisible", "gone", "hidden")
+STOP_COMPLEMENTS = ("stop", "halt", "freeze", "still", "stationary", "static", "motionless", "pause")
+STOP_PHRASES = (("stand", "still"), ("stay", "still"), ("not", "move"), ("stay", "put"), ("come", "to"),
+                ("keep", "still"), ("stop", "moving"))
+REVERSE_COMPLEMENTS = ("reverse", "backwards", "backward")
+REVERSE_PHRASES = (("go", "back"), ("turn", "around"), ("move", "backwards"), ("go", "backwards"),
+                   ("move", "backward"), ("go", "backward"), ("run", "backwards"))
+# Amount words around a colour or speed change ("a bit darker", "much faster").
+AMOUNT_WORDS = ("slightly", "bit", "little", "much", "alot", "lot", "far", "way", "somewhat", "tad", "even", "more",
+                "less", "a")
+# Speed edit verbs: their factor, and which way "a lot" / "a bit" pushes it.
+SPEED_VERB_FACTORS = {"speed": 2.0, "slow": 0.5, "accelerate": 2.0, "increase": 2.0, "decelerate": 0.5,
+                      "decrease": 0.5, "reduce": 0.5, "double": 2.0, "halve": 0.5, "triple": 3.0, "quadruple": 4.0}
+SPEED_UP_VERBS = ("speed", "accelerate", "increase")
+SLOW_DOWN_VERBS = ("slow", "decelerate", "decrease", "reduce")

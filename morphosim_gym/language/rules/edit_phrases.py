@@ -3,17 +3,28 @@ into op drafts (dicts of `EditOp` fields, targets not yet resolved)."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from ...errors import CommandError
 from ..colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
 from ..lexicon import (
     ADDITIVE_COLORS,
+    AMOUNT_WORDS,
     BRIGHTER,
+    COPULAS,
     DARKER,
     DIRECTION_WORDS,
     FILLER,
     LEFTOVER_OK,
+    REMOVE_COMPLEMENTS,
+    RESIZE_WORDS,
+    REVERSE_COMPLEMENTS,
+    REVERSE_PHRASES,
+    SLOW_DOWN_VERBS,
+    SPEED_UP_VERBS,
+    SPEED_VERB_FACTORS,
+    STOP_COMPLEMENTS,
+    STOP_PHRASES,
 )
 from ..plan import CameraSpec, ColorSpec
 from .camera import read_camera
@@ -68,35 +79,25 @@ class EditPhrases:
         return self._complement(targets, tail, verb)
 
     def _complement(self, targets: list[TargetDraft], tail: list[str], verb: str) -> list[dict]:
-        tail = [x for x in tail if x not in ("be", "look", "become", "appear", "seem", "to", "please")] if not (
-            tail and tail[0] in ("to", "toward")) else tail
+        """What follows "make X": a state ("disappear", "stop", "go backwards"), a colour, or a motion."""
+        if not (tail and tail[0] in ("to", "toward")):
+            tail = [x for x in tail if x not in COPULAS]
         if not tail:
             raise self.fail("nothing says what to change")
         if any(t.kind == "camera" for t in targets):
             return [self._camera_target_ops(targets, tail)]
         t0 = tail[0]
-        if t0 in ("bigger", "smaller", "larger", "taller", "shorter", "wider", "thinner", "huge", "tiny", "big",
-                  "small", "large"):
+        if t0 in RESIZE_WORDS:
             raise self.fail("resizing objects is not supported")
-        if t0 in ("disappear", "vanish", "invisible", "gone", "hidden") or tail[:2] == ["go", "away"]:
-            return [dict(op="remove", targets=targets)]
-        if t0 in ("stop", "halt", "freeze", "still", "stationary", "static", "motionless", "pause") or tail[:2] in (
-                ["stand", "still"], ["stay", "still"], ["not", "move"], ["stay", "put"], ["come", "to"],
-                ["keep", "still"], ["stop", "moving"]):
-            return [dict(op="stop", targets=targets)]
-        if t0 in ("reverse", "backwards", "backward") or tail[-2:] == ["in", "reverse"] or tail[:2] in (["go", "back"], ["turn", "around"],
-                                                                       ["move", "backwards"], ["go", "backwards"],
-                                                                       ["move", "backward"], ["go", "backward"],
-                                                                       ["run", "backwards"]) \
-                or ("opposite" in tail and ("way" in tail or "direction" in tail)) or tail[-2:] == ["other", "way"]:
-            return [dict(op="reverse", targets=targets)]
-        # colour complements
+        state = _state_complement(tail)
+        if state is not None:
+            return [{"op": state, "targets": targets}]
         op = self._colour_complement(targets, tail)
         if op is not None:
             return [op]
         if verb == "turn" and (t0 in ("left", "right", "around") or t0 in DIRECTION_WORDS):
             if t0 == "around":
-                return [dict(op="reverse", targets=targets)]
+                return [{"op": "reverse", "targets": targets}]
             return self._motion_ops(targets, tail, verb="turn")
         # motion complements: speed, direction, path
         ops = self._motion_ops(targets, tail, verb=verb, allow_fail=True)
@@ -109,63 +110,75 @@ class EditPhrases:
         raise self.fail(f"could not read {' '.join(tail)!r}")
 
     def _colour_complement(self, targets: list[TargetDraft], tail: list[str]) -> dict | None:
+        """A colour change: brightness ("darker", "twice as bright"), added colour ("redder", "more
+        blue"), or a new colour ("blue", "a light blue tint"); None when `tail` names none."""
         tail = [x for x in tail if x not in ("a", "an", "some", "into", "in", "colored", "painted", "look")]
         if not tail:
             return None
         amount_mult = self._amount_mult(tail)
-        core = [x for x in tail if x not in ("slightly", "bit", "little", "much", "alot", "lot", "far", "way",
-                                               "somewhat", "tad", "even", "more", "less", "a", "lot") or x in (
-            "more", "less")]
+        core = [x for x in tail if x not in AMOUNT_WORDS or x in ("more", "less")]
         if not core:
             return None
-        # multiplicative
-        if core[0] in DARKER or core[0] in BRIGHTER:
-            f = DARKER.get(core[0]) or BRIGHTER[core[0]]
-            if core[0] in DARKER:
-                f = {1.0: f, 2.0: 0.4, 0.5: 0.8}[amount_mult]
-            else:
-                f = {1.0: f, 2.0: 2.0, 0.5: 1.25}[amount_mult]
+        f = self._brightness_factor(core, amount_mult)
+        if f is not None:
             return self._multiply(targets, f)
-        if core[:3] in (["half", "as", "bright"], ["half", "as", "light"]):
-            return self._multiply(targets, 0.5)
-        if core[:3] in (["twice", "as", "bright"], ["double", "as", "bright"]):
-            return self._multiply(targets, 2.0)
-        if len(core) >= 3 and number_at(core, 0) is not None and core[1] == "times" and core[2] in (
-                "brighter", "darker", "as"):
-            v = number_at(core, 0)[0]
+        return self._more_or_less(targets, core, amount_mult) or self._assigned_colour(targets, core, tail,
+                                                                                       amount_mult)
+
+    def _brightness_factor(self, core: list[str], amount_mult: float) -> float | None:
+        c0 = core[0]
+        if c0 in DARKER:
+            return {1.0: DARKER[c0], 2.0: 0.4, 0.5: 0.8}[amount_mult]
+        if c0 in BRIGHTER:
+            return {1.0: BRIGHTER[c0], 2.0: 2.0, 0.5: 1.25}[amount_mult]
+        if tuple(core[:3]) in (("half", "as", "bright"), ("half", "as", "light")):
+            return 0.5
+        if tuple(core[:3]) in (("twice", "as", "bright"), ("double", "as", "bright")):
+            return 2.0
+        num = number_at(core, 0) if len(core) >= 3 else None
+        if num is not None and core[1] == "times" and core[2] in ("brighter", "darker", "as"):
+            v = num[0]
             if v <= 0:
                 raise self.fail("a brightness factor must be > 0")
-            return self._multiply(targets, float(v) if core[2] in ("brighter", "as") else 1.0 / v)
-        # additive
-        if core[0] in ADDITIVE_COLORS:
-            name = ADDITIVE_COLORS[core[0]]
+            return float(v) if core[2] in ("brighter", "as") else 1.0 / v
+        return None
+
+    def _more_or_less(self, targets: list[TargetDraft], core: list[str], amount_mult: float) -> dict | None:
+        """ "redder", "more blue", "less green", "more vivid"."""
+        c0 = core[0]
+        if c0 in ADDITIVE_COLORS:
+            name = ADDITIVE_COLORS[c0]
             return self._additive(targets, (name, color_rgb(name), 1), 0.3 * amount_mult)
-        if core[0] in ("more", "less") and len(core) > 1:
-            col = match_color(core, 1)
-            if col is not None:
-                return self._additive(targets, col, (0.3 if core[0] == "more" else -0.3) * amount_mult)
-            if core[1] in ("bright", "vivid", "vibrant", "dark", "light"):
-                bright = core[1] in ("bright", "vivid", "vibrant", "light")
-                up = core[0] == "more"
-                return self._multiply(targets, 1.5 if bright == up else 0.6)
-        # assign
-        col = match_color(core, 0)
+        if c0 not in ("more", "less") or len(core) < 2:
+            return None
+        col = match_color(core, 1)
         if col is not None:
-            rest = [x for x in core[col[2]:] if x not in FILLER]
-            if rest and rest[0] in ("and",):
-                rest = []
-            if rest:
-                if any(x in ("tint", "tinge", "hue") for x in core):
-                    return self._additive(targets, col, 0.3 * amount_mult)
-                return None
-            if any(x in ("tint", "tinge") for x in tail):
-                return self._additive(targets, col, 0.3 * amount_mult)
-            return self._recolor(targets, [col[0]] if " " not in col[0] else col[0].split(), assign=True)
-        if core[0] in COLOR_MODIFIERS or core[0] in MODIFIER_SYNONYMS:
-            if len(core) > 1 and core[1].isalpha() and not known_word(core[1]):
+            return self._additive(targets, col, (0.3 if c0 == "more" else -0.3) * amount_mult)
+        if core[1] in ("bright", "vivid", "vibrant", "dark", "light"):
+            bright = core[1] in ("bright", "vivid", "vibrant", "light")
+            return self._multiply(targets, 1.5 if bright == (c0 == "more") else 0.6)
+        return None
+
+    def _assigned_colour(self, targets: list[TargetDraft], core: list[str], tail: list[str],
+                         amount_mult: float) -> dict | None:
+        """ "blue", "light blue", "a blue tint"; an unknown word after a colour modifier is an error."""
+        col = match_color(core, 0)
+        if col is None:
+            if (core[0] in COLOR_MODIFIERS or core[0] in MODIFIER_SYNONYMS) and len(core) > 1 \
+                    and core[1].isalpha() and not known_word(core[1]):
                 raise self.fail(f"unknown colour {core[1]!r}; colours are the CSS names (e.g. red, navy, lightblue) "
                                 f"optionally after light/dark/pale/bright")
-        return None
+            return None
+        rest = [x for x in core[col[2]:] if x not in FILLER]
+        if rest and rest[0] == "and":
+            rest = []
+        if rest:
+            if any(x in ("tint", "tinge", "hue") for x in core):
+                return self._additive(targets, col, 0.3 * amount_mult)
+            return None
+        if any(x in ("tint", "tinge") for x in tail):
+            return self._additive(targets, col, 0.3 * amount_mult)
+        return self._recolor(targets, [col[0]] if " " not in col[0] else col[0].split(), assign=True)
 
     @staticmethod
     def _amount_mult(tail: Sequence[str]) -> float:
@@ -244,117 +257,75 @@ class EditPhrases:
 
     # speed --------------------------------------------------------------------------------------------------
     def _speed_verb(self, w: str, rest: list[str]) -> dict:
+        """ "speed up the car", "slow the ball down a lot", "double its speed", "slow it by 50 percent"."""
         r = list(rest)
-        factor: float | None = None
         if w in ("speed", "slow"):
             if r and r[0] in ("up", "down"):
                 r = r[1:]
             elif r and r[-1] in ("up", "down"):
                 r = r[:-1]
-            factor = 2.0 if w == "speed" else 0.5
-        elif w in ("accelerate", "increase"):
-            factor = 2.0
-        elif w in ("decelerate", "decrease", "reduce"):
-            factor = 0.5
-        elif w == "double":
-            factor = 2.0
-        elif w == "halve":
-            factor = 0.5
-        elif w == "triple":
-            factor = 3.0
-        elif w == "quadruple":
-            factor = 4.0
-        r = [x for x in r if x not in ("the", "speed", "of", "'s", "velocity", "pace")] if (
-            "speed" in r or "of" in r or "velocity" in r or "pace" in r) else r
-        mult = self._amount_mult(r)
-        if w in ("speed", "accelerate", "increase") and mult != 1.0:
-            factor = {2.0: 3.0, 0.5: 1.25}[mult]
-        if w in ("slow", "decelerate", "decrease", "reduce") and mult != 1.0:
-            factor = {2.0: round(1 / 3, 6), 0.5: 0.8}[mult]
+        if "speed" in r or "of" in r or "velocity" in r or "pace" in r:
+            r = [x for x in r if x not in ("the", "speed", "of", "'s", "velocity", "pace")]
+        factor = _amount_adjusted(w, SPEED_VERB_FACTORS.get(w), self._amount_mult(r))
         r = [x for x in r if x not in ("a", "bit", "little", "lot", "alot", "much", "slightly", "way", "far")]
         by = None
         if "by" in r:
             k = r.index("by")
             by = r[k + 1:]
             r = r[:k]
-        if not r:
-            r = ["it"]
-        targets, j = self._targets(r)
+        targets, _ = self._targets(r or ["it"])
         if by:
-            num = number_at(by, 0)
-            if num is not None and len(by) > num[1] and by[num[1]] == "percent":
-                p = num[0] / 100.0
-                factor = 1 + p if w in ("speed", "accelerate", "increase") else 1 - p
-            elif num is not None and len(by) > num[1] and by[num[1]] in ("times",):
-                factor = float(num[0]) if w in ("speed", "accelerate", "increase") else (
-                    1.0 / num[0] if num[0] else 0.0)
-            elif by[:1] == ["half"]:
-                factor = 1.5 if w in ("speed", "accelerate", "increase") else 0.5
+            factor = _by_amount(w, by, factor)
         if factor is None or factor <= 0:
             raise self.fail("the speed factor must be > 0 (say 'stop' to stop a motion)")
-        if targets and targets[0].kind == "camera":
-            return dict(op="speed", targets=targets, factor=round(factor, 6))
-        return dict(op="speed", targets=targets, factor=round(factor, 6))
+        return {"op": "speed", "targets": targets, "factor": round(factor, 6)}
 
     # motion ops ----------------------------------------------------------------------------------------------
     def _motion_ops(self, targets: list[TargetDraft], tail: list[str], implied: str | None = None,
                     verb: str | None = None, allow_fail: bool = False, speed_only: bool = False) -> list[dict]:
+        """The redirect and/or speed ops of a motion phrase ("to the left", "in circles", "faster")."""
         pred = Predicate()
-        scanner = PhraseScanner(tail, edit=True)
-        scanner.scan(0, len(tail), pred)
-        if tail and tail[0] in ("to", "at") and pred.speed is None and pred.factor is None and speed_only:
-            pass
+        PhraseScanner(tail, edit=True).scan(0, len(tail), pred)
         if speed_only and pred.speed is None and pred.factor is None:
-            num = number_at(tail, 0)
-            if tail[:1] == ["half"]:
-                pred.factor = 0.5
-            elif tail[:1] in (["double"], ["twice"]):
-                pred.factor = 2.0
-            elif num is not None:
-                if num[0] <= 0:
-                    raise self.fail("the speed factor must be > 0 (say 'stop' to stop a motion)")
-                pred.factor = float(num[0])
+            self._bare_speed_factor(tail, pred)
         if implied and not pred.path:
             pred.path = implied
-        ops: list[dict] = []
         if pred.reverse and not (pred.dirs or pred.to_side or pred.end):
-            return [dict(op="reverse", targets=targets)]
-        direction = combine_directions(pred, tail)
-        path = None
+            return [{"op": "reverse", "targets": targets}]
+        direction, path = _edit_path(pred, combine_directions(pred, tail))
         kinds = [k for _, k in pred.verbs]
-        if pred.path:
-            path = pred.path
-        elif pred.clockwise is not None or pred.around is not None:
-            path = "circle"
-        elif pred.oscillate:
-            path = "oscillate"
-            direction = direction or pred.oscillate_axis
-        else:
-            for k in ("zigzag", "circle", "bounce", "oscillate"):
-                if k in kinds:
-                    path = k
-                    break
         if ("stop" in kinds or pred.stationary) and not (direction or path):
-            return [dict(op="stop", targets=targets)]
+            return [{"op": "stop", "targets": targets}]
         if pred.negated and ("move" in kinds or not kinds):
-            return [dict(op="stop", targets=targets)]
+            return [{"op": "stop", "targets": targets}]
+        ops: list[dict] = []
         if direction is not None or path is not None or pred.end is not None or pred.around is not None:
-            d: dict = dict(op="redirect", targets=targets, direction_world=direction, path=path,
-                           clockwise=pred.clockwise if path == "circle" else None)
+            d: dict = {"op": "redirect", "targets": targets, "direction_world": direction, "path": path,
+                       "clockwise": pred.clockwise if path == "circle" else None}
             if pred.end is not None:
                 d["end_np"] = pred.end
             if pred.around is not None:
                 d["around_np"] = pred.around
             ops.append(d)
         if pred.factor is not None:
-            ops.append(dict(op="speed", targets=list(targets), factor=pred.factor))
+            ops.append({"op": "speed", "targets": list(targets), "factor": pred.factor})
         elif pred.speed is not None:
-            ops.append(dict(op="speed", targets=list(targets), speed=pred.speed, speed_word=pred.speed_word))
-        if not ops:
-            if allow_fail:
-                return []
+            ops.append({"op": "speed", "targets": list(targets), "speed": pred.speed, "speed_word": pred.speed_word})
+        if not ops and not allow_fail:
             raise self.fail("expected a direction, path or speed (e.g. 'move the ball to the left')")
         return ops
+
+    def _bare_speed_factor(self, tail: list[str], pred: Predicate) -> None:
+        """ "change the speed to half / double / 3"."""
+        num = number_at(tail, 0)
+        if tail[:1] == ["half"]:
+            pred.factor = 0.5
+        elif tail[:1] in (["double"], ["twice"]):
+            pred.factor = 2.0
+        elif num is not None:
+            if num[0] <= 0:
+                raise self.fail("the speed factor must be > 0 (say 'stop' to stop a motion)")
+            pred.factor = float(num[0])
 
     # camera --------------------------------------------------------------------------------------------------
     def _camera_op(self, cam: dict) -> dict:
@@ -375,3 +346,53 @@ class EditPhrases:
             return dict(op="reverse", targets=cam_t)
         return self._camera_op(read_camera(["camera"] + tail))
 
+
+def _state_complement(tail: list[str]) -> str | None:
+    """The op of a state complement: "disappear" -> remove, "stand still" -> stop, "go backwards" -> reverse."""
+    t0, head, last = tail[0], tuple(tail[:2]), tuple(tail[-2:])
+    if t0 in REMOVE_COMPLEMENTS or head == ("go", "away"):
+        return "remove"
+    if t0 in STOP_COMPLEMENTS or head in STOP_PHRASES:
+        return "stop"
+    if t0 in REVERSE_COMPLEMENTS or last in (("in", "reverse"), ("other", "way")) or head in REVERSE_PHRASES \
+            or ("opposite" in tail and ("way" in tail or "direction" in tail)):
+        return "reverse"
+    return None
+
+
+def _amount_adjusted(verb: str, factor: float | None, mult: float) -> float | None:
+    """ "speed up a lot" 3.0, "slow down a bit" 0.8."""
+    if mult == 1.0:
+        return factor
+    if verb in SPEED_UP_VERBS:
+        return {2.0: 3.0, 0.5: 1.25}[mult]
+    if verb in SLOW_DOWN_VERBS:
+        return {2.0: round(1 / 3, 6), 0.5: 0.8}[mult]
+    return factor
+
+
+def _by_amount(verb: str, by: list[str], factor: float | None) -> float | None:
+    """ "by 50 percent", "by 3 times", "by half"."""
+    up = verb in SPEED_UP_VERBS
+    num = number_at(by, 0)
+    unit = by[num[1]] if num is not None and len(by) > num[1] else None
+    if unit == "percent":
+        p = num[0] / 100.0  # type: ignore[index]
+        return 1 + p if up else 1 - p
+    if unit == "times":
+        return float(num[0]) if up else (1.0 / num[0] if num[0] else 0.0)  # type: ignore[index]
+    if by[:1] == ["half"]:
+        return 1.5 if up else 0.5
+    return factor
+
+
+def _edit_path(pred: Predicate, direction: Any) -> tuple[Any, str | None]:
+    """The (direction, path shape) an edit's motion phrase asks for."""
+    if pred.path:
+        return direction, pred.path
+    if pred.clockwise is not None or pred.around is not None:
+        return direction, "circle"
+    if pred.oscillate:
+        return direction or pred.oscillate_axis, "oscillate"
+    kinds = [k for _, k in pred.verbs]
+    return direction, next((k for k in ("zigzag", "circle", "bounce", "oscillate") if k in kinds), None)
