@@ -30,34 +30,9 @@ __all__ = ["extract_camera_clauses", "read_camera"]
 def extract_camera_clauses(toks: list[str]) -> tuple[list[str], list[list[str]]]:
     """Split camera clauses ("while the camera circles the table", "with a static camera") from the rest."""
     spans: list[tuple[int, int]] = []
-    n = len(toks)
-    for i, w in enumerate(toks):
-        if w not in ("camera", "cam") and not (w == "view" and i > 0 and toks[i - 1] in ("the", "a")):
-            continue
-        if i >= 1 and toks[i - 1] in ("the",) and i >= 2 and toks[i - 2] in ("toward", "to", "at", "from", "past",
-                                                                            "of", "into", "by"):
-            continue
-        if i >= 1 and toks[i - 1] in ("toward", "to", "at", "from", "into"):
-            continue
-        if spans and spans[-1][0] <= i < spans[-1][1]:
-            continue
-        s = i
-        while s > 0 and toks[s - 1] not in CAMERA_BOUNDARY and toks[s - 1] != "and" and not (
-                verb_info(toks[s - 1]) and toks[s - 1] not in CAMERA_FIXED and toks[s - 1] not in CAMERA_ORBIT | CAMERA_PAN | CAMERA_DOLLY):
-            if toks[s - 1] == "with":
-                s -= 1
-                break
-            s -= 1
-        if s > 0 and toks[s - 1] in CAMERA_BOUNDARY | {"and"}:
-            s -= 1
-        e = i + 1
-        while e < n and toks[e] not in CAMERA_BOUNDARY and toks[e] not in SEGMENT_PUNCT:
-            if toks[e] == "and" and e + 1 < n:
-                nxt = parse_np(toks, e + 1)
-                if nxt is not None and nxt.kind in ("category", "unknown") and clause_boundary(toks, e):
-                    break
-            e += 1
-        spans.append((s, e))
+    for i in range(len(toks)):
+        if _names_the_camera(toks, i) and not (spans and spans[-1][0] <= i < spans[-1][1]):
+            spans.append((_clause_start(toks, i), _clause_end(toks, i)))
     if not spans:
         return toks, []
     rest: list[str] = []
@@ -71,6 +46,48 @@ def extract_camera_clauses(toks: list[str]) -> tuple[list[str], list[list[str]]]
     while rest and rest[-1] in ("and", ",", "while", "as", "with"):
         rest.pop()
     return rest, cams
+
+
+def _names_the_camera(toks: list[str], i: int) -> bool:
+    """ "camera" / "the view" as the subject of a clause (not "towards the camera")."""
+    w = toks[i]
+    if w not in ("camera", "cam") and not (w == "view" and i > 0 and toks[i - 1] in ("the", "a")):
+        return False
+    if i >= 2 and toks[i - 1] == "the" and toks[i - 2] in ("toward", "to", "at", "from", "past", "of", "into", "by"):
+        return False
+    return not (i >= 1 and toks[i - 1] in ("toward", "to", "at", "from", "into"))
+
+
+def _clause_start(toks: list[str], i: int) -> int:
+    """Back from the camera word to the clause's boundary ("while", ",", "and", "with", a non-camera verb)."""
+    s = i
+    while s > 0 and toks[s - 1] not in CAMERA_BOUNDARY and toks[s - 1] != "and" and not _other_verb(toks[s - 1]):
+        if toks[s - 1] == "with":
+            s -= 1
+            break
+        s -= 1
+    if s > 0 and (toks[s - 1] in CAMERA_BOUNDARY or toks[s - 1] == "and"):
+        s -= 1
+    return s
+
+
+def _other_verb(w: str) -> bool:
+    """A verb that is no camera verb (it belongs to the clause before the camera's)."""
+    return bool(verb_info(w)) and w not in CAMERA_FIXED and w not in CAMERA_ORBIT and w not in CAMERA_PAN \
+        and w not in CAMERA_DOLLY
+
+
+def _clause_end(toks: list[str], i: int) -> int:
+    """On from the camera word to a boundary, or to "and" before a new subject with its verb."""
+    n = len(toks)
+    e = i + 1
+    while e < n and toks[e] not in CAMERA_BOUNDARY and toks[e] not in SEGMENT_PUNCT:
+        if toks[e] == "and" and e + 1 < n:
+            nxt = parse_np(toks, e + 1)
+            if nxt is not None and nxt.kind in ("category", "unknown") and clause_boundary(toks, e):
+                break
+        e += 1
+    return e
 
 
 @dataclass

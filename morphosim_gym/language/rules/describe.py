@@ -85,6 +85,16 @@ def _only_unknown_words(subjects: list[NounPhrase], pred: Predicate) -> bool:
                                                                 or pred.to_side or pred.settings or pred.path)
 
 
+def _count_of(np_: NounPhrase) -> int:
+    """How many objects a phrase asks for: its number, else PLURAL_DEFAULT_COUNT for a plural or
+    collective, else 1."""
+    if np_.count is not None:
+        return np_.count
+    if np_.collective or (np_.plural and np_.kind in ("category", "unknown")):
+        return PLURAL_DEFAULT_COUNT
+    return 1
+
+
 def _clause_speed(subjects: list[NounPhrase], pred: Predicate) -> tuple[float | None, str | None]:
     """A clause's speed: its speed words, else a relative factor, else a subject's ("a fast car")."""
     if pred.speed is not None:
@@ -237,24 +247,15 @@ class DescriptionReader:
         raise KeyError(name)
 
     def _object_from_np(self, np_: NounPhrase, subject: bool, landmark: bool = False) -> ObjectDraft:
+        """The object a noun phrase names: one already in the plan ("the ball"), else a new one."""
         g = self._ground(np_)
         noun = singular(np_.head) if (np_.plural or np_.kind == "unknown") else np_.head
         if g.method == "vocabulary":
             noun = g.noun if noun_to_category(np_.head) and noun_to_category(np_.head)[1] else noun
-        # coreference: "the ball" (or a bare noun) naming an object already in the plan
-        if np_.det not in ("a", "an", "another") and np_.count is None and not np_.collective:
-            for o in reversed(self.objects):
-                if o.noun == noun or (o.category == g.category and np_.det in ("the", "this", "that")):
-                    if np_.color is not None and o.color is not None and o.color.name != np_.color[0]:
-                        continue
-                    if np_.color is not None and o.color is None:
-                        o.color = ColorSpec(*np_.color)
-                    return o
-        count = 1
-        if np_.count is not None:
-            count = np_.count
-        elif np_.collective or (np_.plural and np_.kind in ("category", "unknown")):
-            count = PLURAL_DEFAULT_COUNT
+        old = self._coreferent(np_, noun, g.category)
+        if old is not None:
+            return old
+        count = _count_of(np_)
         if count < 1 or count > MAX_COUNT:
             raise CommandError(f"Could not generate {count} {noun}s: the count must be between 1 and {MAX_COUNT}")
         names = {o.name for o in self.objects}
@@ -264,10 +265,24 @@ class DescriptionReader:
             name = f"{noun}_{k}"
             k += 1
         o = ObjectDraft(name=name, noun=noun, category=g.category,
-                 color=ColorSpec(*np_.color) if np_.color else None, size=np_.size, scale=np_.scale, count=count,
-                 grounding=g.method, similarity=g.similarity, landmark=landmark)
+                        color=ColorSpec(*np_.color) if np_.color else None, size=np_.size, scale=np_.scale,
+                        count=count, grounding=g.method, similarity=g.similarity, landmark=landmark)
         self.objects.append(o)
         return o
+
+    def _coreferent(self, np_: NounPhrase, noun: str, category: str) -> ObjectDraft | None:
+        """Coreference: "the ball" (or a bare noun) naming an object already in the plan (its colour,
+        when the phrase gives one and the object has none, is set)."""
+        if np_.det in ("a", "an", "another") or np_.count is not None or np_.collective:
+            return None
+        for o in reversed(self.objects):
+            if o.noun == noun or (o.category == category and np_.det in ("the", "this", "that")):
+                if np_.color is not None and o.color is not None and o.color.name != np_.color[0]:
+                    continue
+                if np_.color is not None and o.color is None:
+                    o.color = ColorSpec(*np_.color)
+                return o
+        return None
 
     def _ground(self, np_: NounPhrase):
         if np_.kind == "category":

@@ -298,19 +298,7 @@ class EditPhrases:
             return [{"op": "stop", "targets": targets}]
         if pred.negated and ("move" in kinds or not kinds):
             return [{"op": "stop", "targets": targets}]
-        ops: list[dict] = []
-        if direction is not None or path is not None or pred.end is not None or pred.around is not None:
-            d: dict = {"op": "redirect", "targets": targets, "direction_world": direction, "path": path,
-                       "clockwise": pred.clockwise if path == "circle" else None}
-            if pred.end is not None:
-                d["end_np"] = pred.end
-            if pred.around is not None:
-                d["around_np"] = pred.around
-            ops.append(d)
-        if pred.factor is not None:
-            ops.append({"op": "speed", "targets": list(targets), "factor": pred.factor})
-        elif pred.speed is not None:
-            ops.append({"op": "speed", "targets": list(targets), "speed": pred.speed, "speed_word": pred.speed_word})
+        ops = _redirect_and_speed(targets, pred, direction, path)
         if not ops and not allow_fail:
             raise self.fail("expected a direction, path or speed (e.g. 'move the ball to the left')")
         return ops
@@ -396,3 +384,21 @@ def _edit_path(pred: Predicate, direction: Any) -> tuple[Any, str | None]:
         return direction or pred.oscillate_axis, "oscillate"
     kinds = [k for _, k in pred.verbs]
     return direction, next((k for k in ("zigzag", "circle", "bounce", "oscillate") if k in kinds), None)
+
+
+def _redirect_and_speed(targets: list[TargetDraft], pred: Predicate, direction: Any, path: str | None) -> list[dict]:
+    """A redirect op (a direction, path, end or centre) and/or a speed op (a factor or speed words)."""
+    ops: list[dict] = []
+    if direction is not None or path is not None or pred.end is not None or pred.around is not None:
+        d: dict = {"op": "redirect", "targets": targets, "direction_world": direction, "path": path,
+                   "clockwise": pred.clockwise if path == "circle" else None}
+        if pred.end is not None:
+            d["end_np"] = pred.end
+        if pred.around is not None:
+            d["around_np"] = pred.around
+        ops.append(d)
+    if pred.factor is not None:
+        ops.append({"op": "speed", "targets": list(targets), "factor": pred.factor})
+    elif pred.speed is not None:
+        ops.append({"op": "speed", "targets": list(targets), "speed": pred.speed, "speed_word": pred.speed_word})
+    return ops

@@ -22,45 +22,46 @@ __all__ = ["split_segments", "skip_preamble", "classify", "camera_decl_to_edit"]
 
 
 def split_segments(toks: list[str]) -> list[list[str]]:
+    """The command's segments: split at sentence ends, "then", "afterwards", "finally", "after that"."""
     segs: list[list[str]] = []
     cur: list[str] = []
     i = 0
-    n = len(toks)
-    while i < n:
-        w = toks[i]
-        brk = 0
-        if w in SEGMENT_PUNCT:
-            brk = 1
-        elif w == "then" and cur:
-            brk = 1
-        elif w in ("afterward", "finally", "lastly", "subsequently") and cur:
-            brk = 1
-        elif w == "after" and i + 1 < n and toks[i + 1] in ("that", "this", "which") and cur:
-            brk = 2
-        elif w == "next" and i + 1 < n and toks[i + 1] == "," and cur:
-            brk = 2
+    while i < len(toks):
+        brk = _segment_break(toks, i) if (cur or toks[i] in SEGMENT_PUNCT) else 0
         if brk:
-            while cur and cur[-1] in ("and", ",", ":"):
-                cur.pop()
-            if cur:
-                segs.append(cur)
+            _close_segment(cur, segs)
             cur = []
             i += brk
             continue
-        cur.append(w)
+        cur.append(toks[i])
         i += 1
+    _close_segment(cur, segs)
+    out = []
+    for seg in segs:
+        seg = [w for w in seg if w != ":"]
+        while seg and seg[0] in (",", "and", "then", "so"):
+            seg = seg[1:]
+        if seg:
+            out.append(seg)
+    return out
+
+
+def _segment_break(toks: list[str], i: int) -> int:
+    """How many words a segment break at i takes (0: none); only called inside a segment, or at punctuation."""
+    w = toks[i]
+    nxt = toks[i + 1] if i + 1 < len(toks) else None
+    if w in SEGMENT_PUNCT or w == "then" or w in ("afterward", "finally", "lastly", "subsequently"):
+        return 1
+    if (w == "after" and nxt in ("that", "this", "which")) or (w == "next" and nxt == ","):
+        return 2
+    return 0
+
+
+def _close_segment(cur: list[str], segs: list[list[str]]) -> None:
     while cur and cur[-1] in ("and", ",", ":"):
         cur.pop()
     if cur:
         segs.append(cur)
-    out = []
-    for s in segs:
-        s = [w for w in s if w not in (":",)]
-        while s and s[0] in (",", "and", "then", "so"):
-            s = s[1:]
-        if s:
-            out.append(s)
-    return out
 
 
 def skip_preamble(toks: list[str]) -> list[str]:

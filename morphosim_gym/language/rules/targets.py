@@ -6,6 +6,7 @@ from ...errors import CommandError
 from ..grounding import SceneItem, ground_noun, ground_noun_vocabulary, resolve_in_scene
 from ..plan import CameraSpec, ColorSpec, EditOp, Target, edit_op
 from ..vocabulary import singular
+from .describe import ObjectDraft
 from .edits import EditReader
 from .nouns import NounPhrase
 from .target_phrases import TargetDraft
@@ -76,24 +77,31 @@ class TargetResolver:
         if self.generated:  # a compound command: targets are the plan's objects
             return self._resolve_in_plan(t, toks)
         if self.items is None:
-            if self.require_scene:
-                raise CommandError(f"Could not apply the edit {detok(toks)!r}: there is no scene to edit (pass the "
-                                   f"scene, or describe one first, e.g. 'a ball rolls left; then {detok(toks)}')")
-            if t.kind == "pronoun":
-                if self.salience:
-                    name = self.salience[-1]
-                    g = self._last_ground.get(name)
-                    return Target(text=t.text, noun=name, category=g)
-                raise CommandError(f"Could not tell what {t.text!r} refers to in {detok(toks)!r}: there is no scene "
-                                   f"and no object named before it; name the object (e.g. 'make the ball blue')")
-            if t.kind == "all":
-                return Target(text=t.text, noun="*", category=None)
-            g = ground_noun(t.noun, settings=True)
-            self.salience.append(t.noun)
-            self._last_ground[t.noun] = g.category
-            return Target(text=t.text, noun=t.noun, category=g.category,
-                          color=ColorSpec(*t.color) if t.color else None)
-        # with a scene
+            return self._resolve_without_scene(t, toks)
+        return self._resolve_in_scene(t, toks)
+
+    def _resolve_without_scene(self, t: TargetDraft, toks: list[str]) -> Target:
+        """A target as written, grounded to a category (pronouns: the last target named)."""
+        if self.require_scene:
+            raise CommandError(f"Could not apply the edit {detok(toks)!r}: there is no scene to edit (pass the "
+                               f"scene, or describe one first, e.g. 'a ball rolls left; then {detok(toks)}')")
+        if t.kind == "pronoun":
+            if self.salience:
+                name = self.salience[-1]
+                g = self._last_ground.get(name)
+                return Target(text=t.text, noun=name, category=g)
+            raise CommandError(f"Could not tell what {t.text!r} refers to in {detok(toks)!r}: there is no scene "
+                               f"and no object named before it; name the object (e.g. 'make the ball blue')")
+        if t.kind == "all":
+            return Target(text=t.text, noun="*", category=None)
+        g = ground_noun(t.noun, settings=True)
+        self.salience.append(t.noun)
+        self._last_ground[t.noun] = g.category
+        return Target(text=t.text, noun=t.noun, category=g.category,
+                      color=ColorSpec(*t.color) if t.color else None)
+
+    def _resolve_in_scene(self, t: TargetDraft, toks: list[str]) -> Target:
+        """A target among the scene's objects (pronouns: the last target's objects, or the only object)."""
         items = self.items
         if t.kind == "pronoun":
             if self.scene_salience:
@@ -113,35 +121,43 @@ class TargetResolver:
                       object_ids=tuple(h.id for h in hits), color=ColorSpec(*t.color) if t.color else None)
 
     def _resolve_in_plan(self, t: TargetDraft, toks: list[str]) -> Target:
+        """A target among the objects of the plan being built (a compound command)."""
         if t.kind == "pronoun":
-            if not self.salience:
-                raise CommandError(f"Could not tell what {t.text!r} refers to in {detok(toks)!r}")
-            if t.plural and len(self.salience) >= 2 and self._obj(self.salience[-1]).count == 1:
-                names = [o.name for o in self.objects if not o.landmark] or [self.salience[-1]]
-            else:
-                names = [self.salience[-1]]
-            objs = [self._obj(n) for n in names]
+            objs = self._plan_pronoun(t, toks)
         elif t.kind == "all":
             objs = list(self.objects)
         else:
-            sing = singular(t.noun)
-            objs = [o for o in self.objects if o.noun in (t.noun, sing) or o.name in (t.noun, sing)]
-            if not objs:
-                g = ground_noun_vocabulary(t.noun) or ground_noun_vocabulary(sing)
-                if g is not None:
-                    objs = [o for o in self.objects if o.category == g.category]
-            if not objs:
-                items = [SceneItem(o.name, o.category, i) for i, o in enumerate(self.objects)]
-                if not items:
-                    raise CommandError(f"Could not find {t.text!r}: the command names no objects")
-                hits = resolve_in_scene(t.noun, items, t.text)
-                objs = [self._obj(h.name) for h in hits]
-            if t.color is not None and len(objs) > 1:
-                same = [o for o in objs if o.color is not None and o.color.name == t.color[0]]
-                objs = same or objs
+            objs = self._plan_objects_named(t)
         for o in objs:
             self._touch(o.name)
         cats = {o.category for o in objs}
         noun = "*" if t.kind == "all" else (objs[0].noun if t.kind == "pronoun" else t.noun)
         return Target(text=t.text, noun=noun, category=cats.pop() if len(cats) == 1 and noun != "*" else None,
                       objects=tuple(o.name for o in objs), color=ColorSpec(*t.color) if t.color else None)
+
+    def _plan_pronoun(self, t: TargetDraft, toks: list[str]) -> list[ObjectDraft]:
+        """ "it": the last object named; "them" after a single object: all moving objects."""
+        if not self.salience:
+            raise CommandError(f"Could not tell what {t.text!r} refers to in {detok(toks)!r}")
+        if t.plural and len(self.salience) >= 2 and self._obj(self.salience[-1]).count == 1:
+            names = [o.name for o in self.objects if not o.landmark] or [self.salience[-1]]
+        else:
+            names = [self.salience[-1]]
+        return [self._obj(n) for n in names]
+
+    def _plan_objects_named(self, t: TargetDraft) -> list[ObjectDraft]:
+        """The plan's objects a noun names: by noun or name, else by category, else by meaning."""
+        sing = singular(t.noun)
+        objs = [o for o in self.objects if o.noun in (t.noun, sing) or o.name in (t.noun, sing)]
+        if not objs:
+            g = ground_noun_vocabulary(t.noun) or ground_noun_vocabulary(sing)
+            if g is not None:
+                objs = [o for o in self.objects if o.category == g.category]
+        if not objs:
+            items = [SceneItem(o.name, o.category, i) for i, o in enumerate(self.objects)]
+            if not items:
+                raise CommandError(f"Could not find {t.text!r}: the command names no objects")
+            objs = [self._obj(h.name) for h in resolve_in_scene(t.noun, items, t.text)]
+        if t.color is not None and len(objs) > 1:
+            objs = [o for o in objs if o.color is not None and o.color.name == t.color[0]] or objs
+        return objs
