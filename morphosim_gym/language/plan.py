@@ -614,41 +614,7 @@ class Plan(_Spec):
                 raise _err(f"plan.{name}", f"a list of {cls.__name__}", v)
             object.__setattr__(self, name, tuple(v))
         _str(self.backend, "plan.backend", ("rules", "llm"))
-        if self.mode == "generate":
-            if self.edits:
-                raise CommandError("Invalid plan: a generate plan has no edits (put them in 'then')")
-            if self.camera is None:
-                object.__setattr__(self, "camera", CameraSpec())
-            if self.setting is None:
-                object.__setattr__(self, "setting", "ground")
-                object.__setattr__(self, "setting_source", self.setting_source or "default")
-            _str(self.setting, "plan.setting", list(SETTINGS))
-            _str(self.setting_source, "plan.setting_source", ("text", "inferred", "default"), optional=True)
-            if self.setting_source is None:
-                object.__setattr__(self, "setting_source", "text")
-            if not self.objects and self.setting_source != "text":
-                raise CommandError("Invalid plan: a generate plan needs at least one object or a named setting")
-            names = [o.name for o in self.objects]
-            if len(set(names)) != len(names):
-                raise _err("plan.objects", "objects with unique names", names)
-            moved = [m.target for m in self.motions]
-            if len(set(moved)) != len(moved):
-                raise _err("plan.motions", "at most one motion per object", moved)
-            for m in self.motions:
-                for key in ("target", "start", "end", "around"):
-                    ref = getattr(m, key)
-                    if ref is not None and ref not in names:
-                        raise _err(f"plan.motions[{m.target}].{key}", f"the name of an object of the plan {names}", ref)
-            if self.camera.target is not None and self.camera.target not in names:
-                raise _err("plan.camera.target", f"the name of an object of the plan {names} or null",
-                           self.camera.target)
-            known = set(names)
-        else:
-            if self.objects or self.motions or self.camera is not None or self.setting is not None:
-                raise CommandError("Invalid plan: an edit plan has only edits (no objects, motions, camera, setting)")
-            if not self.edits:
-                raise _err("plan.edits", "at least one edit for an edit plan", [])
-            known = None
+        known = self._check_generate() if self.mode == "generate" else self._check_edit()
         for i, p in enumerate(self.then):
             if p.mode != "edit" or p.then:
                 raise _err(f"plan.then[{i}]", "an edit plan without its own 'then'", p.mode)
@@ -660,6 +626,42 @@ class Plan(_Spec):
                         if bad:
                             raise _err(f"plan.then[{i}] target objects", f"names of objects of the plan {sorted(known)}",
                                        bad)
+
+    def _check_generate(self) -> set[str]:
+        """Defaults and cross-references of a generate plan; the names of its objects."""
+        if self.edits:
+            raise CommandError("Invalid plan: a generate plan has no edits (put them in 'then')")
+        if self.camera is None:
+            object.__setattr__(self, "camera", CameraSpec())
+        if self.setting is None:
+            object.__setattr__(self, "setting", "ground")
+            object.__setattr__(self, "setting_source", self.setting_source or "default")
+        _str(self.setting, "plan.setting", list(SETTINGS))
+        _str(self.setting_source, "plan.setting_source", ("text", "inferred", "default"), optional=True)
+        if self.setting_source is None:
+            object.__setattr__(self, "setting_source", "text")
+        if not self.objects and self.setting_source != "text":
+            raise CommandError("Invalid plan: a generate plan needs at least one object or a named setting")
+        names = [o.name for o in self.objects]
+        if len(set(names)) != len(names):
+            raise _err("plan.objects", "objects with unique names", names)
+        moved = [m.target for m in self.motions]
+        if len(set(moved)) != len(moved):
+            raise _err("plan.motions", "at most one motion per object", moved)
+        for m in self.motions:
+            for key in ("target", "start", "end", "around"):
+                ref = getattr(m, key)
+                if ref is not None and ref not in names:
+                    raise _err(f"plan.motions[{m.target}].{key}", f"the name of an object of the plan {names}", ref)
+        if self.camera.target is not None and self.camera.target not in names:
+            raise _err("plan.camera.target", f"the name of an object of the plan {names} or null", self.camera.target)
+        return set(names)
+
+    def _check_edit(self) -> None:
+        if self.objects or self.motions or self.camera is not None or self.setting is not None:
+            raise CommandError("Invalid plan: an edit plan has only edits (no objects, motions, camera, setting)")
+        if not self.edits:
+            raise _err("plan.edits", "at least one edit for an edit plan", [])
 
     # -- JSON ---------------------------------------------------------------------------------
 
