@@ -519,3 +519,5 @@ SPEED_VERB_FACTORS = {"speed": 2.0, "slow": 0.5, "accelerate": 2.0, "increase": 
                       "decrease": 0.5, "reduce": 0.5, "double": 2.0, "halve": 0.5, "triple": 3.0, "quadruple": 4.0}
 SPEED_UP_VERBS = ("speed", "accelerate", "increase")
 SLOW_DOWN_VERBS = ("slow", "decelerate", "decrease", "reduce")
+# "make it <verb> and ...": these verbs continue the "make" edit instead of starting a new one.
+MAKE_MOTION_VERBS = ("move", "go", "stop", "bounce", "run", "fly", "drive", "swim", "roll")

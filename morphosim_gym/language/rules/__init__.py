@@ -44,4 +44,4 @@ from ..lexicon import EDIT_VERBS, EXAMPLES
 from .parser import MAX_TEXT_CHARS, parse_rules
 from .tokens import tokenize
 
-__all__ = ["parse_rules", "tokenize", "MAX_TEXT_CHARS", "EXAMPLES", "EDIT_VERBS"]
+__all__ = ["EDIT_VERBS", "EXAMPLES", "MAX_TEXT_CHARS", "parse_rules", "tokenize"]

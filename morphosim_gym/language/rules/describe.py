@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 from ...errors import CommandError
 from ..grounding import ground_noun, ground_noun_vocabulary
@@ -28,7 +28,7 @@ from .nouns import NounPhrase, clause_boundary, parse_np
 from .scanner import PhraseScanner
 from .tokens import detok, is_number
 
-__all__ = ["ObjectDraft", "number_agreement", "DescriptionReader"]
+__all__ = ["DescriptionReader", "ObjectDraft", "number_agreement"]
 
 
 @dataclass

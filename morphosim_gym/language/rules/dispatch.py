@@ -14,11 +14,12 @@ vocabulary lookup). Digits ("3", "2.5") are looked up under the key `NUMBER`.
 from __future__ import annotations
 
 import functools
-from typing import Any, Callable, Iterable
+from collections.abc import Callable, Iterable
+from typing import Any
 
 from .tokens import is_number
 
-__all__ = ["WordTable", "NUMBER"]
+__all__ = ["NUMBER", "WordTable"]
 
 NUMBER = "<number>"
 

@@ -3,7 +3,8 @@ into op drafts (dicts of `EditOp` fields, targets not yet resolved)."""
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from ...errors import CommandError
 from ..colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
@@ -203,19 +204,19 @@ class EditPhrases:
         leftover = [x for x in tail[col[2]:] if x not in FILLER and x not in (",", "and", "please")]
         if leftover:
             raise self.fail(f"could not read {' '.join(tail)!r} as one colour")
-        return dict(op="recolor", targets=targets, mode="assign", color=ColorSpec(col[0], col[1]))
+        return {"op": "recolor", "targets": targets, "mode": "assign", "color": ColorSpec(col[0], col[1])}
 
     @staticmethod
     def _additive(targets: list[TargetDraft], col: tuple, amount: float) -> dict:
         amount = max(-1.0, min(1.0, amount))
         delta = tuple(round(amount * c, 6) + 0.0 for c in col[1])
-        return dict(op="recolor", targets=targets, mode="additive", color=ColorSpec(col[0], col[1]), delta=delta)
+        return {"op": "recolor", "targets": targets, "mode": "additive", "color": ColorSpec(col[0], col[1]), "delta": delta}
 
     def _multiply(self, targets: list[TargetDraft], f: float) -> dict:
         if f <= 0:
             raise self.fail("a brightness factor must be > 0")
         f = round(f, 6)
-        return dict(op="recolor", targets=targets, mode="multiplicative", factor_rgb=(f, f, f))
+        return {"op": "recolor", "targets": targets, "mode": "multiplicative", "factor_rgb": (f, f, f)}
 
     # change / set -----------------------------------------------------------------------------------------
     def _change(self, rest: list[str]) -> list[dict]:
@@ -247,7 +248,7 @@ class EditPhrases:
             return [self._recolor(targets, tail, assign=True)]
         if attr in ("direction", "motion", "path", "movement", "trajectory", "velocity"):
             if not tail or tail in (["around"],) or tail[0] in ("opposite", "reverse", "reversed", "backwards"):
-                return [dict(op="reverse", targets=targets)]
+                return [{"op": "reverse", "targets": targets}]
             return self._motion_ops(targets, tail, verb="change")
         if attr == "speed":
             if not tail:
@@ -319,7 +320,7 @@ class EditPhrases:
     def _camera_op(self, cam: dict) -> dict:
         spec = CameraSpec(motion=cam.get("motion", "fixed"), direction=cam.get("direction"),
                           speed=cam.get("speed", 1.0), speed_word=cam.get("speed_word"))
-        d = dict(op="camera", camera=spec)
+        d = {"op": "camera", "camera": spec}
         if cam.get("target_np") is not None:
             d["camera_target_np"] = cam["target_np"]
         return d
@@ -329,9 +330,9 @@ class EditPhrases:
         pred = Predicate()
         PhraseScanner(tail, edit=True).scan(0, len(tail), pred)
         if pred.factor is not None:
-            return dict(op="speed", targets=cam_t, factor=pred.factor)
+            return {"op": "speed", "targets": cam_t, "factor": pred.factor}
         if pred.reverse:
-            return dict(op="reverse", targets=cam_t)
+            return {"op": "reverse", "targets": cam_t}
         return self._camera_op(read_camera(["camera"] + tail))
 
 

@@ -7,10 +7,10 @@ the reader of its first word (`_VERB_READERS`, keyed by the verb groups of
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ..colors import color_rgb, match_color
-from ..lexicon import ADDITIVE_COLORS, BRIGHTER, DARKER, DETS, EDIT_VERB_GROUPS, EDIT_VERBS, PRONOUNS
+from ..lexicon import ADDITIVE_COLORS, BRIGHTER, DARKER, DETS, EDIT_VERB_GROUPS, EDIT_VERBS, MAKE_MOTION_VERBS, PRONOUNS
 from .camera import read_camera
 from .edit_phrases import EditPhrases
 from .nouns import parse_np
@@ -61,12 +61,10 @@ class EditReader(EditPhrases):
 
     def _new_op_at(self, toks: list[str], j: int, cur: list[str]) -> list[str] | None:
         """Whether a new operation starts at j (after "and"): the words it starts with, else None."""
-        if j < len(toks) and toks[j] in EDIT_VERBS and toks[j] != "show":
-            # "make it stop and ..." keeps going; "... and delete the car" starts a new op
-            if not (cur[0] in ("make", "let", "have") and toks[j] in ("move", "go", "stop", "bounce", "run", "fly",
-                                                                      "drive", "swim", "roll")
-                    and _make_has_no_complement(cur)):
-                return []
+        # "make it stop and ..." keeps going; "... and delete the car" starts a new op
+        if j < len(toks) and toks[j] in EDIT_VERBS and toks[j] != "show" and not (
+                cur[0] in ("make", "let", "have") and toks[j] in MAKE_MOTION_VERBS and _make_has_no_complement(cur)):
+            return []
         # gapping: "make the ball blue and the cube red"
         if cur[0] in ("make", "turn", "paint", "color", "colour", "dye") and j < len(toks) and \
                 toks[j] in DETS | {"it"} and any(match_color(cur, k) is not None for k in range(2, len(cur))):
@@ -144,7 +142,7 @@ class EditReader(EditPhrases):
         return [self._multiply(targets, DARKER.get(w, 0.6) * self._amount_mult(rest[k:]))]
 
     def _brighten(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
-        targets, k = self._targets(rest)
+        targets, _ = self._targets(rest)
         return [self._multiply(targets, BRIGHTER.get(w, 1.5))]
 
     def _redden(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:

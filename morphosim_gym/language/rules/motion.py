@@ -3,8 +3,9 @@ and how they combine into one motion."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 from ...errors import CommandError
 from ..lexicon import (
@@ -16,7 +17,7 @@ from ..lexicon import (
 from .nouns import NounPhrase
 from .tokens import detok
 
-__all__ = ["Predicate", "side_at", "direction_of", "merge_pred", "merge_motion", "combine_directions", "path_of"]
+__all__ = ["Predicate", "combine_directions", "direction_of", "merge_motion", "merge_pred", "path_of", "side_at"]
 
 
 @dataclass

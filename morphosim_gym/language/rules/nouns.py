@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 from ..colors import match_color
 from ..grounding import ALL_WORDS, CAMERA_WORDS
@@ -26,7 +26,7 @@ from ..lexicon import (
 from ..vocabulary import CATEGORIES, noun_to_category, word_to_setting
 from .tokens import NUMBER_PHRASES, SIZE_PHRASES, is_adverb, known_word, match_phrase, number_at, stop_word
 
-__all__ = ["NounPhrase", "parse_np", "clause_boundary"]
+__all__ = ["NounPhrase", "clause_boundary", "parse_np"]
 
 
 @dataclass

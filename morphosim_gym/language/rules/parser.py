@@ -14,7 +14,7 @@ from .segments import camera_decl_to_edit, classify, split_segments
 from .targets import TargetResolver
 from .tokens import detok, known_word, tokenize
 
-__all__ = ["parse_rules", "RuleParser", "MAX_TEXT_CHARS"]
+__all__ = ["MAX_TEXT_CHARS", "RuleParser", "parse_rules"]
 
 
 MAX_TEXT_CHARS = 2000

@@ -10,7 +10,8 @@ and takes the first that reads something; the last handler skips any word (notin
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from ..lexicon import (
     AUX,

@@ -18,7 +18,7 @@ from ..lexicon import (
 from .camera import extract_camera_clauses
 from .nouns import parse_np
 
-__all__ = ["split_segments", "skip_preamble", "classify", "camera_decl_to_edit"]
+__all__ = ["camera_decl_to_edit", "classify", "skip_preamble", "split_segments"]
 
 
 def split_segments(toks: list[str]) -> list[list[str]]:

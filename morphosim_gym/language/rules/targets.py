@@ -12,7 +12,7 @@ from .nouns import NounPhrase
 from .target_phrases import TargetDraft
 from .tokens import detok
 
-__all__ = ["target_from_hits", "TargetResolver"]
+__all__ = ["TargetResolver", "target_from_hits"]
 
 
 def target_from_hits(text: str, noun: str, hits: list[SceneItem]) -> Target:

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import re
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from ...errors import CommandError
 from ..colors import match_color
@@ -30,8 +31,18 @@ from ..lexicon import (
 )
 from ..vocabulary import noun_to_category
 
-__all__ = ["tokenize", "is_adverb", "is_number", "stop_word", "match_phrase", "NUMBER_PHRASES", "SIZE_PHRASES",
-            "number_at", "known_word", "detok"]
+__all__ = [
+    "NUMBER_PHRASES",
+    "SIZE_PHRASES",
+    "detok",
+    "is_adverb",
+    "is_number",
+    "known_word",
+    "match_phrase",
+    "number_at",
+    "stop_word",
+    "tokenize",
+]
 
 
 _COMPOUND_RE = re.compile(r"\b(" + "|".join(re.escape(k) for k in sorted(COMPOUNDS, key=len, reverse=True)) + r")\b")
