@@ -521,3 +521,45 @@ SPEED_UP_VERBS = ("speed", "accelerate", "increase")
 SLOW_DOWN_VERBS = ("slow", "decelerate", "decrease", "reduce")
 # "make it <verb> and ...": these verbs continue the "make" edit instead of starting a new one.
 MAKE_MOTION_VERBS = ("move", "go", "stop", "bounce", "run", "fly", "drive", "swim", "roll")
+
+# -- smaller word lists of the rule parser ----------------------------------------------------------------
+# "much darker", "a bit faster": words that push a change further, or less far.
+AMOUNT_MORE = ("much", "alot", "lot", "far", "way", "considerably")
+AMOUNT_LESS = ("slightly", "bit", "little", "somewhat", "tad", "touch")
+# "change the direction of X": attributes of a motion.
+MOTION_ATTRIBUTES = ("direction", "motion", "path", "movement", "trajectory", "velocity")
+# Words dropped after "change X" ("change it to blue", "so that it is faster").
+CHANGE_FILLERS = ("to", "into", "a", "an", "from", "so", "that", "it", "is")
+# "slow down the speed of the car": words around the speed noun.
+SPEED_NOUN_FILLERS = ("the", "speed", "of", "'s", "velocity", "pace")
+AMOUNT_FILLERS = ("a", "bit", "little", "lot", "alot", "much", "slightly", "way", "far")
+# Words dropped around a colour ("paint it in a blue color as well").
+RECOLOR_FILLERS = ("to", "into", "in", "a", "an", "the", "color", "colour", "as", "well")
+COLOUR_COMPLEMENT_FILLERS = ("a", "an", "some", "into", "in", "colored", "painted", "look")
+# "stop the motion of the dog", "stop it from moving".
+STOP_FILLERS = ("from", "moving", "motion", "the", "movement", "of")
+# Edit verbs that need their object ("go" alone is not an edit).
+MOTION_VERBS_NEEDING_OBJECT = ("go", "head", "drive", "fly", "run", "swim", "sail", "roll")
+# "make the ball blue and the cube red": verbs whose edit a second object shares.
+GAPPING_VERBS = ("make", "turn", "paint", "color", "colour", "dye")
+# Words dropped before the colour of "paint" / "tint".
+TINT_FILLERS = ("to", "into", "in", "with", "a", "an", "slightly", "bit")
+PAINT_FILLERS = ("to", "into", "in", "with", "a", "an")
+# "towards the camera", "past the camera": the camera as a landmark, not a clause subject.
+CAMERA_LANDMARK_PREPS = ("toward", "to", "at", "from", "past", "of", "into", "by")
+# Words that pan the camera, and where a camera clause names its setting.
+PAN_SIDES = ("left", "right", "leftward", "rightward", "leftwards", "rightwards")
+CAMERA_PLACE_PREPS = ("on", "in", "across", "over", "above", "at", "inside")
+# "the left of the screen": what a side belongs to.
+SIDE_FRAME_WORDS = ("the", "screen", "frame", "image", "scene", "view")
+# Words that can join a new clause ("a ball rolls and a cat runs").
+CLAUSE_JOINERS = ("and", ",", "while", "as", "whereas", "whilst", "but", "meanwhile", "plus")
+# Sides a "from X to Y" phrase can start with ("left to right").
+SIDE_STARTS = ("left", "right", "top", "bottom", "north", "south", "east", "west")
+# Words an object of a verb starts with in a description ("a dog fetches a ball").
+OBJECT_STARTS = ("a", "an", "the", "two", "three", "some")
+# "all of the objects in the scene": words after "all" / "everything" in an edit target.
+ALL_TARGET_TAIL = ("objects", "things", "the", "of", "items", "them", "in", "scene")
+OBJECT_PRONOUNS = ("it", "them", "they", "its", "their", "itself")
+EVERYTHING_WORDS = ("everything", "everybody", "everyone")
+DEMONSTRATIVES = ("this", "that", "these", "those")

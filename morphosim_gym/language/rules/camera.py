@@ -12,9 +12,12 @@ from ..lexicon import (
     CAMERA_DOLLY_OUT,
     CAMERA_DOLLY_VERBS,
     CAMERA_FIXED,
+    CAMERA_LANDMARK_PREPS,
     CAMERA_ORBIT,
     CAMERA_PAN,
+    CAMERA_PLACE_PREPS,
     CLOCKWISE_WORDS,
+    PAN_SIDES,
     SEGMENT_PUNCT,
     SPEED_PHRASES,
     verb_info,
@@ -53,7 +56,7 @@ def _names_the_camera(toks: list[str], i: int) -> bool:
     w = toks[i]
     if w not in ("camera", "cam") and not (w == "view" and i > 0 and toks[i - 1] in ("the", "a")):
         return False
-    if i >= 2 and toks[i - 1] == "the" and toks[i - 2] in ("toward", "to", "at", "from", "past", "of", "into", "by"):
+    if i >= 2 and toks[i - 1] == "the" and toks[i - 2] in CAMERA_LANDMARK_PREPS:
         return False
     return not (i >= 1 and toks[i - 1] in ("toward", "to", "at", "from", "into"))
 
@@ -197,7 +200,7 @@ def _dolly_out(words: list[str], i: int, cam: _CameraDraft) -> int | None:
     return i + 1
 
 
-@_TABLE.on("left", "right", "leftward", "rightward", "leftwards", "rightwards")
+@_TABLE.on(PAN_SIDES)
 def _pan_side(words: list[str], i: int, cam: _CameraDraft) -> int | None:
     if cam.motion in (None, "pan", "fixed"):
         cam.motion = "pan"
@@ -234,7 +237,7 @@ def _not_moving(words: list[str], i: int, cam: _CameraDraft) -> int | None:
     return i + 2
 
 
-@_TABLE.on("on", "in", "across", "over", "above", "at", "inside")
+@_TABLE.on(CAMERA_PLACE_PREPS)
 def _place(words: list[str], i: int, cam: _CameraDraft) -> int | None:
     """ "on the table", "over the water": the setting."""
     np_ = parse_np(words, i + 1) if i + 1 < len(words) else None

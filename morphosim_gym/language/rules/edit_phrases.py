@@ -10,18 +10,26 @@ from ...errors import CommandError
 from ..colors import COLOR_MODIFIERS, MODIFIER_SYNONYMS, color_rgb, match_color
 from ..lexicon import (
     ADDITIVE_COLORS,
+    AMOUNT_FILLERS,
+    AMOUNT_LESS,
+    AMOUNT_MORE,
     AMOUNT_WORDS,
     BRIGHTER,
+    CHANGE_FILLERS,
+    COLOUR_COMPLEMENT_FILLERS,
     COPULAS,
     DARKER,
     DIRECTION_WORDS,
     FILLER,
     LEFTOVER_OK,
+    MOTION_ATTRIBUTES,
+    RECOLOR_FILLERS,
     REMOVE_COMPLEMENTS,
     RESIZE_WORDS,
     REVERSE_COMPLEMENTS,
     REVERSE_PHRASES,
     SLOW_DOWN_VERBS,
+    SPEED_NOUN_FILLERS,
     SPEED_UP_VERBS,
     SPEED_VERB_FACTORS,
     STOP_COMPLEMENTS,
@@ -113,7 +121,7 @@ class EditPhrases:
     def _colour_complement(self, targets: list[TargetDraft], tail: list[str]) -> dict | None:
         """A colour change: brightness ("darker", "twice as bright"), added colour ("redder", "more
         blue"), or a new colour ("blue", "a light blue tint"); None when `tail` names none."""
-        tail = [x for x in tail if x not in ("a", "an", "some", "into", "in", "colored", "painted", "look")]
+        tail = [x for x in tail if x not in COLOUR_COMPLEMENT_FILLERS]
         if not tail:
             return None
         amount_mult = self._amount_mult(tail)
@@ -183,14 +191,14 @@ class EditPhrases:
 
     @staticmethod
     def _amount_mult(tail: Sequence[str]) -> float:
-        if any(x in ("much", "alot", "lot", "far", "way", "considerably") for x in tail):
+        if any(x in AMOUNT_MORE for x in tail):
             return 2.0
-        if any(x in ("slightly", "bit", "little", "somewhat", "tad", "touch") for x in tail):
+        if any(x in AMOUNT_LESS for x in tail):
             return 0.5
         return 1.0
 
     def _recolor(self, targets: list[TargetDraft], tail: list[str], assign: bool = True) -> dict:
-        tail = [x for x in tail if x not in ("to", "into", "in", "a", "an", "the", "color", "colour", "as", "well")]
+        tail = [x for x in tail if x not in RECOLOR_FILLERS]
         col = match_color(tail, 0) if tail else None
         if col is None:
             word = next((x for x in tail if x not in FILLER), None)
@@ -237,7 +245,7 @@ class EditPhrases:
                                     "trajectory", "velocity"):
                 attr = tail[0]
                 tail = tail[1:]
-        while tail and tail[0] in ("to", "into", "a", "an", "from", "so", "that", "it", "is"):
+        while tail and tail[0] in CHANGE_FILLERS:
             if tail[0] == "from":  # "change X from red to blue"
                 k = tail.index("to") if "to" in tail else len(tail)
                 tail = tail[k:]
@@ -246,7 +254,7 @@ class EditPhrases:
         if attr in ("color", "colors") or (attr is None and tail and (match_color(tail) is not None
                                                                       or tail[0] in ADDITIVE_COLORS)):
             return [self._recolor(targets, tail, assign=True)]
-        if attr in ("direction", "motion", "path", "movement", "trajectory", "velocity"):
+        if attr in MOTION_ATTRIBUTES:
             if not tail or tail in (["around"],) or tail[0] in ("opposite", "reverse", "reversed", "backwards"):
                 return [{"op": "reverse", "targets": targets}]
             return self._motion_ops(targets, tail, verb="change")
@@ -266,9 +274,9 @@ class EditPhrases:
             elif r and r[-1] in ("up", "down"):
                 r = r[:-1]
         if "speed" in r or "of" in r or "velocity" in r or "pace" in r:
-            r = [x for x in r if x not in ("the", "speed", "of", "'s", "velocity", "pace")]
+            r = [x for x in r if x not in SPEED_NOUN_FILLERS]
         factor = _amount_adjusted(w, SPEED_VERB_FACTORS.get(w), self._amount_mult(r))
-        r = [x for x in r if x not in ("a", "bit", "little", "lot", "alot", "much", "slightly", "way", "far")]
+        r = [x for x in r if x not in AMOUNT_FILLERS]
         by = None
         if "by" in r:
             k = r.index("by")

@@ -10,7 +10,21 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..colors import color_rgb, match_color
-from ..lexicon import ADDITIVE_COLORS, BRIGHTER, DARKER, DETS, EDIT_VERB_GROUPS, EDIT_VERBS, MAKE_MOTION_VERBS, PRONOUNS
+from ..lexicon import (
+    ADDITIVE_COLORS,
+    BRIGHTER,
+    DARKER,
+    DETS,
+    EDIT_VERB_GROUPS,
+    EDIT_VERBS,
+    GAPPING_VERBS,
+    MAKE_MOTION_VERBS,
+    MOTION_VERBS_NEEDING_OBJECT,
+    PAINT_FILLERS,
+    PRONOUNS,
+    STOP_FILLERS,
+    TINT_FILLERS,
+)
 from .camera import read_camera
 from .edit_phrases import EditPhrases
 from .nouns import parse_np
@@ -66,7 +80,7 @@ class EditReader(EditPhrases):
                 cur[0] in ("make", "let", "have") and toks[j] in MAKE_MOTION_VERBS and _make_has_no_complement(cur)):
             return []
         # gapping: "make the ball blue and the cube red"
-        if cur[0] in ("make", "turn", "paint", "color", "colour", "dye") and j < len(toks) and \
+        if cur[0] in GAPPING_VERBS and j < len(toks) and \
                 toks[j] in DETS | {"it"} and any(match_color(cur, k) is not None for k in range(2, len(cur))):
             np_ = parse_np(toks, j, edit=True)
             if np_ is not None and np_.end < len(toks) and (match_color(toks, np_.end) is not None
@@ -92,12 +106,12 @@ class EditReader(EditPhrases):
 
     def _paint(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
         targets, k = self._targets(rest)
-        tail = [x for x in rest[k:] if x not in ("to", "into", "in", "with", "a", "an")]
+        tail = [x for x in rest[k:] if x not in PAINT_FILLERS]
         return [self._recolor(targets, tail, assign=True)]
 
     def _tint(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
         targets, k = self._targets(rest)
-        tail = [x for x in rest[k:] if x not in ("to", "into", "in", "with", "a", "an", "slightly", "bit")]
+        tail = [x for x in rest[k:] if x not in TINT_FILLERS]
         col = match_color(tail)
         if col is None:
             raise self.fail("expected a colour to tint with")
@@ -189,7 +203,7 @@ class EditReader(EditPhrases):
     def _stop(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
         if "camera" in rest:
             return [self._camera_op({"motion": "fixed"})]
-        r = [x for x in rest if x not in ("from", "moving", "motion", "the", "movement", "of")] or ["it"]
+        r = [x for x in rest if x not in STOP_FILLERS] or ["it"]
         targets, _ = self._targets(rest if rest and rest[0] in DETS | PRONOUNS | {"all", "everything"} else r)
         return [{"op": "stop", "targets": targets}]
 
@@ -207,7 +221,7 @@ class EditReader(EditPhrases):
     def _move(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
         if rest and "camera" in rest[:3]:
             return [self._camera_op(read_camera(toks))]
-        if w in ("go", "head", "drive", "fly", "run", "swim", "sail", "roll") and (not rest or rest[0] not in
+        if w in MOTION_VERBS_NEEDING_OBJECT and (not rest or rest[0] not in
                                                                                    DETS | PRONOUNS):
             raise self.fail(f"'{w}' needs an object: say which object should {w}")
         targets, k = self._targets(rest)

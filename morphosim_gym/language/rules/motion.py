@@ -10,6 +10,7 @@ from typing import Any
 from ...errors import CommandError
 from ..lexicon import (
     DIRECTIONS,
+    SIDE_FRAME_WORDS,
     SIDE_TAIL,
     SIDE_WORDS,
     vec_norm,
@@ -66,7 +67,7 @@ def side_at(toks: Sequence[str], i: int) -> tuple[str, int] | None:
     side = SIDE_WORDS[toks[j]]
     j += 1
     while j < n and toks[j] in SIDE_TAIL | {"the", "screen", "frame", "image", "scene", "view"} and toks[j] != "to":
-        if toks[j] == "of" and not (j + 1 < n and toks[j + 1] in ("the", "screen", "frame", "image", "scene", "view")):
+        if toks[j] == "of" and not (j + 1 < n and toks[j + 1] in SIDE_FRAME_WORDS):
             break
         j += 1
     return side, j - i

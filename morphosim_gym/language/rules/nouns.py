@@ -9,6 +9,7 @@ from ..colors import match_color
 from ..grounding import ALL_WORDS, CAMERA_WORDS
 from ..lexicon import (
     AUX,
+    CLAUSE_JOINERS,
     COLLECTIVE_NOUNS,
     DETS,
     GENERIC_NOUNS,
@@ -261,7 +262,7 @@ def clause_boundary(toks: Sequence[str], k: int) -> bool:
     w = toks[k]
     if w in SEGMENT_PUNCT:
         return True
-    if w not in ("and", ",", "while", "as", "whereas", "whilst", "but", "meanwhile", "plus"):
+    if w not in CLAUSE_JOINERS:
         return False
     if w == "as" and k + 2 < len(toks) and toks[k + 2] == "as":  # "as fast as"
         return False

@@ -22,9 +22,11 @@ from ..lexicon import (
     FAR_WORDS,
     INTENSIFIERS,
     LOCATIVE_PREPS,
+    OBJECT_STARTS,
     PATH_MODIFIERS,
     RELATIVE,
     RELATIVE_SPEED_STARTS,
+    SIDE_STARTS,
     SPEED_PHRASES,
     SPEED_VERBS,
     STATIONARY,
@@ -144,7 +146,7 @@ def _from(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
     return np_.end
 
 
-@_on("left", "right", "top", "bottom", "north", "south", "east", "west")
+@_on(SIDE_STARTS)
 def _side_to_side(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
     """ "left to right", "top to the bottom"."""
     t = sc.span
@@ -496,7 +498,7 @@ def _each_other(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
 def _object(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
     """An object of some verb ("a dog fetches a ball"), in descriptions."""
     w = sc.span[i]
-    if sc.edit or not (w in ("a", "an", "the", "two", "three", "some") or noun_to_category(w)):
+    if sc.edit or not (w in OBJECT_STARTS or noun_to_category(w)):
         return None
     np_ = parse_np(sc.span, i)
     if np_ is not None and np_.kind == "category" and np_.end > i:

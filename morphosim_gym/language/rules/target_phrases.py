@@ -7,7 +7,20 @@ from dataclasses import dataclass
 
 from ...errors import CommandError
 from ..colors import match_color
-from ..lexicon import ADDITIVE_COLORS, BRIGHTER, DARKER, DETS, EDIT_VERBS, PRONOUN_ATTRIBUTES, PRONOUNS, SCENE_WORDS
+from ..lexicon import (
+    ADDITIVE_COLORS,
+    ALL_TARGET_TAIL,
+    BRIGHTER,
+    DARKER,
+    DEMONSTRATIVES,
+    DETS,
+    EDIT_VERBS,
+    EVERYTHING_WORDS,
+    OBJECT_PRONOUNS,
+    PRONOUN_ATTRIBUTES,
+    PRONOUNS,
+    SCENE_WORDS,
+)
 from ..vocabulary import noun_to_category, singular
 from .nouns import parse_np
 from .tokens import stop_word
@@ -26,10 +39,6 @@ class TargetDraft:
     plural: bool = False
 
 
-_ALL_WORDS = ("everything", "everybody", "everyone")
-_ALL_TAIL = ("objects", "things", "the", "of", "items", "them", "in", "scene")
-_DEMONSTRATIVES = ("this", "that", "these", "those")
-_OBJECT_PRONOUNS = ("it", "them", "they", "its", "their", "itself")
 
 
 def read_targets(toks: Sequence[str], fail: Callable[[str], CommandError],
@@ -76,7 +85,7 @@ def _is_everything(toks: Sequence[str], i: int) -> bool:
     """ "everything", "all", "all objects", "all of them" (but not "all the balls")."""
     n = len(toks)
     w = toks[i]
-    if w in _ALL_WORDS:
+    if w in EVERYTHING_WORDS:
         return True
     if w != "all" or not (i + 1 >= n or toks[i + 1] in ("objects", "things", "the", "of", "items", "and", ",")):
         return False
@@ -85,7 +94,7 @@ def _is_everything(toks: Sequence[str], i: int) -> bool:
 
 def _everything(toks: Sequence[str], i: int, out: list[TargetDraft]) -> int:
     j = i + 1
-    while j < len(toks) and toks[j] in _ALL_TAIL:
+    while j < len(toks) and toks[j] in ALL_TARGET_TAIL:
         j += 1
     out.append(TargetDraft(text=" ".join(toks[i:j]), kind="all", noun="*"))
     return j
@@ -94,9 +103,9 @@ def _everything(toks: Sequence[str], i: int, out: list[TargetDraft]) -> int:
 def _is_pronoun_target(toks: Sequence[str], i: int) -> bool:
     """ "it", "them", "its", or a demonstrative before what is changed ("this one", "that red")."""
     w = toks[i]
-    if w in _OBJECT_PRONOUNS:
+    if w in OBJECT_PRONOUNS:
         return True
-    if w not in _DEMONSTRATIVES:
+    if w not in DEMONSTRATIVES:
         return False
     if i + 1 >= len(toks):
         return True
