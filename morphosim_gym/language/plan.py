@@ -562,13 +562,14 @@ class CameraOp(EditOp):
 
 EDIT_KINDS: dict[str, type[EditOp]] = {k.op: k for k in (RecolorOp, RemoveOp, ExtractOp, ReverseOp, RedirectOp,
                                                           SpeedOp, StopOp, CameraOp)}
+_INIT_FIELDS = {k: frozenset(f.name for f in fields(k) if f.init) for k in EDIT_KINDS.values()}
 
 
 def edit_op(op: Any, **fields_: Any) -> EditOp:
     """The edit of kind `op` (a name of `EDIT_OPS`) with the given fields; a field another kind has
     may be given as None (the dict form has them all), any other value is an error naming it."""
-    kind = EDIT_KINDS.get(_str(op, "edit.op", EDIT_OPS))  # type: ignore[arg-type]
-    own = {f.name for f in fields(kind) if f.init}
+    kind = EDIT_KINDS[_str(op, "edit.op", EDIT_OPS)]  # type: ignore[index]
+    own = _INIT_FIELDS[kind]
     for k, v in fields_.items():
         if k not in own:
             if k not in EDIT_KEYS:
