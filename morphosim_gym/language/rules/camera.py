@@ -34,7 +34,8 @@ def extract_camera_clauses(toks: list[str]) -> tuple[list[str], list[list[str]]]
     """Split camera clauses ("while the camera circles the table", "with a static camera") from the rest."""
     spans: list[tuple[int, int]] = []
     for i in range(len(toks)):
-        if _names_the_camera(toks, i) and not (spans and spans[-1][0] <= i < spans[-1][1]):
+        if toks[i] in ("camera", "cam", "view") and _names_the_camera(toks, i) and not (
+                spans and spans[-1][0] <= i < spans[-1][1]):
             spans.append((_clause_start(toks, i), _clause_end(toks, i)))
     if not spans:
         return toks, []

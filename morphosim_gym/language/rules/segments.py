@@ -27,13 +27,14 @@ def split_segments(toks: list[str]) -> list[list[str]]:
     cur: list[str] = []
     i = 0
     while i < len(toks):
-        brk = _segment_break(toks, i) if (cur or toks[i] in SEGMENT_PUNCT) else 0
+        w = toks[i]
+        brk = _segment_break(toks, i) if w in _BREAK_WORDS and (cur or w in SEGMENT_PUNCT) else 0
         if brk:
             _close_segment(cur, segs)
             cur = []
             i += brk
             continue
-        cur.append(toks[i])
+        cur.append(w)
         i += 1
     _close_segment(cur, segs)
     out = []
@@ -44,6 +45,9 @@ def split_segments(toks: list[str]) -> list[list[str]]:
         if seg:
             out.append(seg)
     return out
+
+
+_BREAK_WORDS = frozenset(SEGMENT_PUNCT) | {"then", "afterward", "finally", "lastly", "subsequently", "after", "next"}
 
 
 def _segment_break(toks: list[str], i: int) -> int:
