@@ -12,12 +12,14 @@ scene's history.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..errors import CommandError, EditError
 from ..language import parse
+from ..language.plan import CameraOp, EditOp, ExtractOp, RecolorOp, RedirectOp, RemoveOp, ReverseOp, SpeedOp, StopOp
 from ..scene import Provenance, Scene4D
 from ..scene.camera import camera_path
 from . import ops
@@ -71,51 +73,77 @@ class SceneEditor:
             raise EditError(f"The selection for {query!r} is empty in this scene; objects: {scene.object_names}")
         return sel
 
-    def apply(self, scene: Scene4D, op: Any) -> Scene4D:
+    def apply(self, scene: Scene4D, op: EditOp) -> Scene4D:
         """Apply one parsed `EditOp` (no history entry of its own)."""
-        kind = op.op
-        if kind == "camera":
-            return self._camera(scene, op)
-        sel = self.select(scene, op)
-        ids = list(sel.object_ids)
-        if kind == "recolor":
-            return ops.recolor(scene, sel.mask, op.mode, rgb=None if op.color is None else op.color.rgb,
-                               delta=op.delta, factor_rgb=op.factor_rgb)
-        if kind == "remove":
-            return ops.remove(scene, sel.mask)
-        if kind == "extract":
-            return ops.extract(scene, sel.mask)
-        if kind == "reverse":
-            return ops.reverse(scene, ids)
-        if kind == "stop":
-            return ops.stop(scene, ids)
-        if kind == "speed":
-            factor = op.factor if op.factor is not None else op.speed
-            return ops.change_speed(scene, ids, float(factor))
-        if kind == "redirect":
-            if op.path not in (None, "straight"):
-                raise EditError(f"Changing a motion's path shape to {op.path!r} is not supported by the editor; "
-                                f"it can reverse, redirect (a new direction or a landmark), change speed or stop")
-            direction = op.direction_world
-            if op.end is not None:
-                goal = scene.object_center(op.end, 0.0)
-                here = np.mean([scene.object_center(i, 0.0) for i in ids], axis=0)
-                d = goal - here
-                d[2] = 0.0
-                if np.linalg.norm(d) < 1e-9:
-                    raise EditError(f"Cannot head towards {op.end!r}: the object is already there")
-                direction = tuple(d / np.linalg.norm(d))
-            if direction is None:
-                raise EditError("Expected a new direction or a landmark for the redirect, found neither")
-            out = ops.redirect(scene, ids, direction)
-            if op.factor is not None or op.speed is not None:
-                out = ops.change_speed(out, ids, float(op.factor if op.factor is not None else op.speed))
-            return out
-        raise EditError(f"Unsupported edit operation {kind!r}")
+        handler = _HANDLERS.get(type(op))
+        if handler is None:
+            raise EditError(f"Unsupported edit operation {getattr(op, 'op', type(op).__name__)!r}")
+        if isinstance(op, CameraOp):
+            return handler(scene, op, None)
+        return handler(scene, op, self.select(scene, op))
 
-    def _camera(self, scene: Scene4D, op: Any) -> Scene4D:
-        spec = op.camera
-        base = scene.cameras[0]
-        centre = scene.centre()
-        cams = camera_path(spec, base, centre, scene.num_frames)
-        return scene.derive(None, cameras=tuple(cams) if len(set(map(id, cams))) > 1 else (cams[0],))
+
+# -- one handler per edit kind: (scene, op, selection of its targets) -> new scene ------------------------
+
+
+def _recolor(scene: Scene4D, op: RecolorOp, sel: Selection) -> Scene4D:
+    return ops.recolor(scene, sel.mask, op.mode, rgb=None if op.color is None else op.color.rgb,
+                       delta=op.delta, factor_rgb=op.factor_rgb)
+
+
+def _remove(scene: Scene4D, op: RemoveOp, sel: Selection) -> Scene4D:
+    return ops.remove(scene, sel.mask)
+
+
+def _extract(scene: Scene4D, op: ExtractOp, sel: Selection) -> Scene4D:
+    return ops.extract(scene, sel.mask)
+
+
+def _reverse(scene: Scene4D, op: ReverseOp, sel: Selection) -> Scene4D:
+    return ops.reverse(scene, list(sel.object_ids))
+
+
+def _stop(scene: Scene4D, op: StopOp, sel: Selection) -> Scene4D:
+    return ops.stop(scene, list(sel.object_ids))
+
+
+def _speed(scene: Scene4D, op: SpeedOp, sel: Selection) -> Scene4D:
+    factor = op.factor if op.factor is not None else op.speed
+    return ops.change_speed(scene, list(sel.object_ids), float(factor))
+
+
+def _redirect(scene: Scene4D, op: RedirectOp, sel: Selection) -> Scene4D:
+    ids = list(sel.object_ids)
+    if op.path not in (None, "straight"):
+        raise EditError(f"Changing a motion's path shape to {op.path!r} is not supported by the editor; "
+                        f"it can reverse, redirect (a new direction or a landmark), change speed or stop")
+    direction = op.direction_world
+    if op.end is not None:
+        goal = scene.object_center(op.end, 0.0)
+        here = np.mean([scene.object_center(i, 0.0) for i in ids], axis=0)
+        d = goal - here
+        d[2] = 0.0
+        if np.linalg.norm(d) < 1e-9:
+            raise EditError(f"Cannot head towards {op.end!r}: the object is already there")
+        direction = tuple(d / np.linalg.norm(d))
+    if direction is None:
+        raise EditError("Expected a new direction or a landmark for the redirect, found neither")
+    out = ops.redirect(scene, ids, direction)
+    if op.factor is not None or op.speed is not None:
+        out = ops.change_speed(out, ids, float(op.factor if op.factor is not None else op.speed))
+    return out
+
+
+def _camera(scene: Scene4D, op: CameraOp, sel: None) -> Scene4D:
+    spec = op.camera
+    base = scene.cameras[0]
+    centre = scene.centre()
+    cams = camera_path(spec, base, centre, scene.num_frames)
+    return scene.derive(None, cameras=tuple(cams) if len(set(map(id, cams))) > 1 else (cams[0],))
+
+
+_HANDLERS: dict[type, Callable[[Scene4D, Any, Any], Scene4D]] = {
+    RecolorOp: _recolor, RemoveOp: _remove, ExtractOp: _extract, ReverseOp: _reverse, StopOp: _stop,
+    SpeedOp: _speed, RedirectOp: _redirect, CameraOp: _camera,
+}
+

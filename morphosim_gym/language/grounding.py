@@ -200,44 +200,75 @@ def resolve_in_scene(noun: str, items: Sequence[SceneItem], text: str | None = N
         if not hits:
             raise CommandError(f"The scene has no objects to edit for {text!r}")
         return hits
+    hits = _by_name(noun, items, color) or _by_vocabulary(noun, items, text) or _by_meaning(noun, items, text)
+    if not hits:
+        raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
+    if color is not None and len(hits) > 1:
+        hits = _nearest_colour(hits, color)
+    return hits
+
+
+def _by_name(noun: str, items: Sequence[SceneItem], color: tuple[float, float, float] | None) -> list[SceneItem]:
+    """Objects named by the noun ("ball", "balls"); with a colour, also its numbered siblings ("ball_2")."""
     sing = singular(noun)
     hits = [it for it in items if it.name.lower() in (noun, sing) or singular(it.name.lower()) == sing]
     if color is not None and hits:
         # "the blue ball" among "ball" and "ball_2": numbered siblings share the noun, the colour picks
         hits += [it for it in items if it not in hits and _numbered_base(it.name.lower()) in (noun, sing)]
-    if not hits:
-        g = ground_noun_vocabulary(noun, settings=True) or ground_noun_vocabulary(sing, settings=True)
-        if g is not None:
-            hits = [it for it in items if it.category == g.category]
-            if not hits and g.kind == "category":  # "the automobile" -> an object named "car"
-                hits = [it for it in items if singular(it.name.lower()) == g.category]
-        if not hits and g is not None and g.kind == "category":
-            # a known category the scene does not have: never re-map it to another category by meaning
-            raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
-    # by meaning, among foreground objects (backgrounds are named by their setting words)
-    pool = [it for it in items if not it.background]
-    if not hits and pool and embeddings.is_available():
-        q = embeddings.embed([f"a {noun}"])[0]
-        names = embeddings.embed([f"a {it.name}" for it in pool])
-        cats = embeddings.embed([f"a {it.category}" for it in pool])
-        score = np.maximum(names @ q, cats @ q)
-        best = float(score.max())
-        if best >= SCENE_FLOOR:
-            wants_all = bool(set(text.lower().split()) & {"all", "every", "both", "each"})
-            margin = ALL_MARGIN if wants_all else AMBIGUITY_MARGIN
-            close = [it for it, s in zip(pool, score) if s >= max(best - margin, SCENE_FLOOR)]
-            cats = sorted({t.category for t in close})
-            if len(cats) > 1 and not wants_all:
-                raise AmbiguousTargetError(
-                    f"{text!r} could mean {' or '.join(cats)} (similar matches); name one, or say 'all' to edit "
-                    f"every match. The scene's objects are: {_describe(items)}")
-            hits = [it for it in pool if it.category in cats]
-    if not hits:
-        raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
-    if color is not None and len(hits) > 1:
-        colored = [it for it in hits if it.color is not None]
-        if colored:
-            d = [sum((a - b) ** 2 for a, b in zip(it.color, color)) for it in colored]
-            m = min(d)
-            hits = [it for it, di in zip(colored, d) if di <= m + 1e-9]
     return hits
+
+
+def _by_vocabulary(noun: str, items: Sequence[SceneItem], text: str) -> list[SceneItem]:
+    """Objects of the noun's vocabulary category ("the automobile" -> the car).
+
+    Raises:
+        TargetNotFoundError: a known category the scene does not have (never re-mapped by meaning).
+    """
+    sing = singular(noun)
+    g = ground_noun_vocabulary(noun, settings=True) or ground_noun_vocabulary(sing, settings=True)
+    if g is None:
+        return []
+    hits = [it for it in items if it.category == g.category]
+    if not hits and g.kind == "category":  # "the automobile" -> an object named "car"
+        hits = [it for it in items if singular(it.name.lower()) == g.category]
+    if not hits and g.kind == "category":
+        raise TargetNotFoundError(f"Could not find {text!r} in the scene; its objects are: {_describe(items)}")
+    return hits
+
+
+def _by_meaning(noun: str, items: Sequence[SceneItem], text: str) -> list[SceneItem]:
+    """Foreground objects whose name or category is nearest the noun by meaning (backgrounds are
+    named by their setting words).
+
+    Raises:
+        AmbiguousTargetError: near matches of several categories and no "all".
+    """
+    pool = [it for it in items if not it.background]
+    if not pool or not embeddings.is_available():
+        return []
+    q = embeddings.embed([f"a {noun}"])[0]
+    names = embeddings.embed([f"a {it.name}" for it in pool])
+    cats = embeddings.embed([f"a {it.category}" for it in pool])
+    score = np.maximum(names @ q, cats @ q)
+    best = float(score.max())
+    if best < SCENE_FLOOR:
+        return []
+    wants_all = bool(set(text.lower().split()) & {"all", "every", "both", "each"})
+    margin = ALL_MARGIN if wants_all else AMBIGUITY_MARGIN
+    close = [it for it, s in zip(pool, score) if s >= max(best - margin, SCENE_FLOOR)]
+    categories = sorted({t.category for t in close})
+    if len(categories) > 1 and not wants_all:
+        raise AmbiguousTargetError(
+            f"{text!r} could mean {' or '.join(categories)} (similar matches); name one, or say 'all' to edit "
+            f"every match. The scene's objects are: {_describe(items)}")
+    return [it for it in pool if it.category in categories]
+
+
+def _nearest_colour(hits: list[SceneItem], color: tuple[float, float, float]) -> list[SceneItem]:
+    """Among several matches, those whose colour is nearest `color` (all of them when none has one)."""
+    colored = [it for it in hits if it.color is not None]
+    if not colored:
+        return hits
+    d = [sum((a - b) ** 2 for a, b in zip(it.color, color)) for it in colored]
+    m = min(d)
+    return [it for it, di in zip(colored, d) if di <= m + 1e-9]

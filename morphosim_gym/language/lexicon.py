@@ -24,11 +24,16 @@ import threading
 from pathlib import Path
 from typing import Iterable
 
-from ..colors import CSS_COLORS, EXTRA_COLORS, COLOR_MODIFIERS, MODIFIER_SYNONYMS
-from .vocabulary import CATEGORIES, SETTING_WORDS, _NOUNS
+from ..colors import COLOR_MODIFIERS, CSS_COLORS, EXTRA_COLORS, MODIFIER_SYNONYMS
+from .vocabulary import _NOUNS, CATEGORIES, SETTING_WORDS
 
 __all__ = ["SPEED_PHRASES", "SPEED_VERBS", "SIZE_WORDS", "NUMBER_WORDS", "DIRECTIONS", "VERBS", "verb_info",
-           "correct_typo", "lexicon_words", "english_words", "PLURAL_DEFAULT_COUNT", "COLLECTIVE_NOUNS", "vec_norm"]
+           "correct_typo", "lexicon_words", "english_words", "PLURAL_DEFAULT_COUNT", "COLLECTIVE_NOUNS", "vec_norm",
+           "EXAMPLES", "COMPOUNDS", "CONTRACTIONS", "ITS_NEXT", "DETS", "PREPS", "LOCATIVE_PREPS", "CONJ", "RELATIVE",
+           "INTENSIFIERS", "STATIONARY", "PRONOUNS", "EDIT_VERBS", "EDIT_STOP_VERBS", "SPATIAL_NOUNS", "PREAMBLE_WORDS",
+           "PREAMBLE_PHRASES", "SEGMENT_PUNCT", "SPEED_WORDS_1", "VIEWERS", "SIDE_WORDS", "SIDE_TAIL", "MODALS",
+           "CONTINUATIONS", "CAMERA_ORBIT", "CAMERA_PAN", "CAMERA_DOLLY", "CAMERA_FIXED", "CAMERA_BOUNDARY",
+           "ADDITIVE_COLORS", "DARKER", "BRIGHTER", "REMOVE_WORDS", "LEFTOVER_OK", "FILLER"]
 
 Vec3 = tuple[float, float, float]
 
@@ -333,3 +338,228 @@ def correct_typo(word: str) -> str | None:
     """The parser word `word` is one edit away from (insert, delete, substitute, transpose), or None
     when the word is known, short (< 4 letters), a real English word, or ambiguous."""
     return _TYPOS.correct(word, lexicon_words())
+
+
+# -- parser word classes (the rule parser's closed word lists) -------------------------------------------
+
+EXAMPLES = ('"a red ball bounces from right to left"', '"a red cube moves to the plate while the camera circles '
+            'the table"', '"make the bus yellow"', '"delete the ball"', '"reverse its motion"')
+COMPOUNDS = {"zig-zag": "zigzag", "zig zag": "zigzag", "counter-clockwise": "counterclockwise",
+             "counter clockwise": "counterclockwise", "anti-clockwise": "anticlockwise",
+             "anti clockwise": "anticlockwise", "north-east": "northeast", "north-west": "northwest",
+             "south-east": "southeast", "south-west": "southwest", "north east": "northeast",
+             "north west": "northwest", "south east": "southeast", "south west": "southwest",
+             "back-and-forth": "back and forth", "to-and-fro": "to and fro", "get rid of": "getridof",
+             "a lot": "alot", "colour": "color", "colours": "colors", "coloured": "colored",
+             "grey": "grey", "aeroplane": "airplane", "towards": "toward", "afterwards": "afterward"}
+CONTRACTIONS = {"don't": ("do", "not"), "doesn't": ("does", "not"), "didn't": ("did", "not"), "isn't": ("is", "not"),
+                "aren't": ("are", "not"), "won't": ("will", "not"), "can't": ("can", "not"), "cannot": ("can", "not"),
+                "let's": ("let", "us"), "i'd": ("i", "would"), "it'll": ("it", "will"), "shouldn't": ("should", "not")}
+ITS_NEXT = {"motion", "movement", "direction", "color", "speed", "path", "trajectory", "course", "way", "velocity",
+            "heading", "colors", "hue"}
+DETS = {"a", "an", "the", "this", "that", "these", "those", "another", "its", "their", "his", "her", "my", "our",
+        "your", "each", "every", "all", "any"}
+PREPS = {"from", "to", "toward", "into", "onto", "through", "across", "along", "over", "on", "in", "inside",
+         "within", "under", "beneath", "below", "above", "by", "near", "beside", "behind", "past", "between",
+         "among", "around", "round", "at", "with", "upon", "atop", "alongside", "throughout", "via", "against",
+         "off", "out", "for", "without", "underneath", "amid", "amongst", "beyond", "towards"}
+LOCATIVE_PREPS = {"through", "across", "along", "over", "on", "in", "inside", "within", "under", "beneath", "below",
+                  "above", "by", "near", "beside", "behind", "past", "between", "among", "at", "upon", "atop",
+                  "alongside", "throughout", "via", "underneath", "amid", "amongst", "beyond", "against", "off"}
+CONJ = {"and", "or", "but", "while", "as", "whereas", "whilst", "meanwhile", "then", "plus", "also", "so"}
+RELATIVE = {"that", "which", "who", "whose"}
+INTENSIFIERS = {"very", "really", "extremely", "super", "incredibly", "quite", "rather", "pretty", "so"}
+STATIONARY = {"still", "stationary", "motionless", "static", "idle", "immobile", "unmoving", "parked"}
+PRONOUNS = {"it", "them", "they", "its", "their", "itself", "themselves", "both", "he", "she", "him", "his", "her"}
+EDIT_VERBS = {"make", "turn", "paint", "color", "recolor", "recolour", "dye", "tint", "shade", "change", "set",
+              "switch", "alter", "delete", "remove", "erase", "eliminate", "discard", "getridof", "take", "clear",
+              "extract", "isolate", "segment", "cut", "pull", "single", "keep", "show", "only", "separate",
+              "reverse", "invert", "flip", "redirect", "move", "send", "steer", "direct", "guide", "stop", "halt",
+              "freeze", "pause", "speed", "slow", "accelerate", "decelerate", "double", "halve", "triple",
+              "quadruple", "darken", "brighten", "lighten", "dim", "orbit", "circle", "rotate", "pan", "zoom",
+              "dolly", "let", "have", "give", "add", "increase", "decrease", "reduce", "hide", "drop", "bounce",
+              "zigzag", "go", "drive", "fly", "roll", "run", "swim", "sail", "head", "apply", "whiten",
+              "blacken", "redden", "recolorize", "colorize", "wipe"}
+# Edit verbs that end a noun phrase ("make the sedan reverse"); common adjectives such as "clear" or
+# "single" are left out so that "crystal-clear waters" stays one phrase.
+EDIT_STOP_VERBS = {"make", "turn", "paint", "recolor", "recolour", "dye", "tint", "change", "delete", "remove", "erase",
+                   "eliminate", "discard", "extract", "isolate", "reverse", "invert", "redirect", "send", "steer", "halt",
+                   "freeze", "pause", "speed", "slow", "accelerate", "decelerate", "darken", "brighten", "lighten",
+                   "orbit", "pan", "zoom", "dolly", "getridof"}
+# Place nouns that are parts of space, not objects: "to the edge", "across the surface".
+SPATIAL_NOUNS = {"edge", "edges", "side", "sides", "end", "center", "centre", "middle", "corner", "corners", "front",
+                 "back", "surface", "distance", "horizon", "foreground", "background", "bottom", "top", "spot",
+                 "place", "position", "area", "space", "direction", "way", "path", "line", "finish", "goal",
+                 "destination", "start", "origin", "point", "frame", "screen", "scene", "picture", "image",
+                 "view", "world", "sunlight", "sun", "light", "air", "waves", "current", "wind", "dark", "night",
+                 "day", "morning", "evening", "sunset", "sunrise", "weather", "rain", "fog", "mist", "shadow",
+                 "shadows", "lane", "trail", "course", "route", "pace", "speed", "motion", "manner",
+                 "runway", "airport", "track", "tracks", "railway", "rail", "rails", "bridge", "tunnel", "sidewalk",
+                 "other", "another"}
+PREAMBLE_WORDS = {"please", "now", "and", "also", "then", "next", "finally", "so", "ok", "okay", "just", "kindly",
+                  "afterward", "after", "later", "lastly", "additionally", "first", "second", "third"}
+PREAMBLE_PHRASES = [("can", "you"), ("could", "you"), ("would", "you"), ("will", "you"), ("i", "want", "you", "to"),
+                    ("i", "would", "like", "you", "to"), ("i", "d", "like", "you", "to"), ("let", "us"),
+                    ("go", "ahead", "and"), ("try", "to"), ("after", "that"), ("i", "need", "you", "to"),
+                    ("lets",), ("we", "should"), ("you", "should")]
+SEGMENT_PUNCT = {".", "!", "?", ";"}
+SPEED_WORDS_1 = {p[0] for p in SPEED_PHRASES if len(p) == 1}
+VIEWERS = set(VIEWER_WORDS)
+SIDE_WORDS = {"left": "left", "right": "right", "top": "up", "bottom": "down", "north": "north", "south": "south",
+              "east": "east", "west": "west", "northeast": "northeast", "northwest": "northwest",
+              "southeast": "southeast", "southwest": "southwest", "up": "up", "down": "down", "sky": "up",
+              "ground": "down", "upper": "up", "lower": "down", "leftside": "left", "rightside": "right"}
+SIDE_TAIL = {"side", "edge", "end", "part", "corner", "of", "frame", "screen", "hand", "bank", "half"}
+MODALS = {"should", "must", "shall", "will", "needs", "need", "has", "have", "ought", "is", "are", "becomes",
+          "become", "turns", "gets", "get"}
+CONTINUATIONS = {"stops": "stop", "halts": "stop", "freezes": "stop", "reverses": "reverse", "disappears": "remove",
+                 "vanishes": "remove", "turns": "turn", "becomes": "make", "speeds": "speed", "slows": "slow",
+                 "changes": "change", "accelerates": "accelerate", "decelerates": "decelerate"}
+CAMERA_ORBIT = {"orbit", "orbits", "orbiting", "orbited", "circle", "circles", "circling", "circled", "rotate", "rotates",
+                "rotating", "rotated", "revolve", "revolves", "revolving", "around", "round", "spins", "spin", "spinning",
+                "sweeps", "sweep", "sweeping", "arcs", "arc"}
+CAMERA_PAN = {"pan", "pans", "panning", "panned", "turns", "turn", "turning", "swivels", "swivel", "swings", "tracks",
+              "track", "tracking", "slides", "slide", "sliding", "trucks", "truck"}
+CAMERA_DOLLY = {"dolly", "dollies", "dollying", "zoom", "zooms", "zooming", "push", "pushes", "pushing", "pull", "pulls",
+                "pulling", "approaches", "approach", "approaching", "closer", "nearer", "retreats", "retreat", "backs",
+                "recedes", "in", "out", "forward", "forwards", "backward", "backwards", "back", "away", "closes"}
+CAMERA_FIXED = {"static", "fixed", "still", "stationary", "locked", "steady", "motionless", "stays", "stay", "remains",
+                "immobile", "stable", "unmoving", "tripod", "freeze", "frozen", "stopped", "stops", "stop"}
+CAMERA_BOUNDARY = {"while", "as", "whereas", "whilst", ",", "but", "meanwhile"}
+ADDITIVE_COLORS = {"redder": "red", "bluer": "blue", "greener": "green", "yellower": "yellow", "pinker": "pink",
+                   "whiter": "white", "oranger": "orange", "purpler": "purple", "greyer": "grey", "grayer": "gray",
+                   "blacker": "black", "browner": "brown"}
+DARKER = {"darker": 0.6, "dimmer": 0.6, "duller": 0.7, "darken": 0.6, "dim": 0.6, "blacker": 0.6}
+BRIGHTER = {"brighter": 1.5, "lighter": 1.5, "brighten": 1.5, "lighten": 1.5, "shinier": 1.3}
+REMOVE_WORDS = {"disappear", "vanish", "invisible", "gone", "go away", "hidden"}
+LEFTOVER_OK = {"from", "the", "scene", "view", "frame", "picture", "video", "image", "please", "entirely",
+               "completely", "now", "too", "as", "well", "also", "again", "out", "away", "of", "in", "world",
+               "whole", "entire", "right", "immediately", "instantly", ",", "direction", "motion", "movement",
+               "'s", "trajectory", "path", "course", "heading", "velocity", "only", "just"}
+FILLER = {"please", "color", "colored", "coloured", "instead", "again", "too", "now", "one", "ones", "as", "well",
+          "in", "the", "scene", "from", "entirely", "completely", "totally", "fully", "of", "tint", "shade",
+          "hue", "paint", "also"}
+
+# Relative speeds ("twice as fast", "at half speed", "3 times the normal speed", "much faster").
+AS_SPEED_FACTORS = {**{(m, w): 0.5 for m in ("twice", "double") for w in ("slow", "slowly")},
+                    **{(m, w): 2.0 for m in ("twice", "double") for w in ("fast", "quickly", "quick", "rapidly")},
+                    **{("half", w): 0.5 for w in ("fast", "quickly", "quick")}}
+FRACTION_FACTORS = {"half": 0.5, "double": 2.0, "twice": 2.0, "triple": 3.0}
+FAST_COMPARATIVES = ("faster", "quicker", "speedier")
+SPEED_TIMES_FILLERS = ("the", "normal", "its", "their", "original", "speed", "current")
+MUCH_WORDS = ("much", "alot", "far", "way", "lot")
+BIT_WORDS = ("bit", "little", "slightly", "somewhat", "tad")
+# Words a relative speed phrase can start with (besides digits).
+RELATIVE_SPEED_STARTS = frozenset({"minus", "negative", "twice", "double", "half", "at", "to", "triple", "slower",
+                                   *FAST_COMPARATIVES, *NUMBER_WORDS})
+# Adjectives between "in a" and a path noun ("in a big circle", "in a straight line").
+PATH_MODIFIERS = ("big", "large", "small", "wide", "tight", "little", "circular", "straight", "zigzag", "wavy", "round")
+# Motion verbs that take a direct object, and the role of that object in the motion.
+VERB_OBJECT_ROLES = {**dict.fromkeys(("circle", "orbit", "revolve", "loop"), "around"),
+                     **dict.fromkeys(("chase", "follow", "approach", "reach"), "end"), "leave": "start",
+                     **dict.fromkeys(("cross", "pass", "traverse", "enter", "climb", "descend"), "statics")}
+# Nouns that name no kind of object: True where the word means all of them ("things", "everything").
+GENERIC_NOUNS = {"object": False, "thing": False, "item": False, "objects": True, "things": True, "items": True,
+                 "everything": True, "stuff": True}
+# "its motion", "their speed": a possessive standing alone as a noun phrase before these.
+POSSESSIVE_ATTRIBUTES = ("motion", "movement", "direction", "speed", "color", "path", "trajectory")
+# "this one", "that's", "this color": a demonstrative is an edit target before these.
+PRONOUN_ATTRIBUTES = ("'s", "motion", "movement", "direction", "speed", "color", "path", "one", "ones")
+# "the whole scene", "the entire world": everything.
+SCENE_WORDS = ("scene", "whole", "entire", "world")
+# The verbs an edit operation starts with, by the reader that reads them (rules/edits.py).
+EDIT_VERB_GROUPS: dict[str, tuple[str, ...]] = {
+    "camera_decl": ("__camera__",),  # a camera description in an edit segment ("the camera pans left")
+    "make": ("make", "let", "have", "turn", "get"),
+    "paint": ("paint", "color", "colour", "recolor", "recolour", "dye", "colorize", "recolorize", "shade"),
+    "tint": ("tint",),
+    "change": ("change", "set", "switch", "alter", "apply"),
+    "give": ("give",),
+    "add": ("add",),
+    "darken": ("darken", "dim", "blacken"),
+    "brighten": ("brighten", "lighten", "whiten"),
+    "redden": ("redden",),
+    "remove": ("delete", "remove", "erase", "eliminate", "discard", "getridof", "hide", "clear", "drop", "wipe"),
+    "take": ("take",),
+    "extract": ("extract", "isolate", "segment", "separate", "single", "pull", "cut", "keep", "show", "only"),
+    "reverse": ("reverse", "invert", "flip"),
+    "stop": ("stop", "halt", "freeze", "pause"),
+    "speed": ("speed", "slow", "accelerate", "decelerate", "double", "halve", "triple", "quadruple", "increase",
+              "decrease", "reduce"),
+    "camera": ("orbit", "circle", "rotate", "pan", "zoom", "dolly"),
+    "move": ("move", "send", "steer", "direct", "guide", "redirect", "bounce", "zigzag", "go", "drive", "fly", "roll",
+             "run", "swim", "sail", "head"),
+}
+# Camera verbs that move it along its view axis; the ones that say which way.
+CAMERA_DOLLY_VERBS = ("zoom", "zooms", "zooming", "dolly", "dollies", "dollying", "push", "pushes", "pushing", "pull",
+                      "pulls", "pulling", "closer", "nearer", "approaches", "approach", "approaching", "retreats",
+                      "backs", "recedes")
+CAMERA_DOLLY_IN = ("closer", "nearer", "approaches", "approach", "approaching")
+CAMERA_DOLLY_OUT = ("retreats", "backs", "recedes")
+# Words skipped before a clause's subject ("there is a ball", "we see a dog", "with a cat").
+CLAUSE_LEADS = (",", "there", "is", "are", "we", "see", "you", "can", "shows", "show", "with", "here")
+# Words between a modal and the change it asks for ("should be", "is now", "has to be made").
+MODAL_FILLERS = ("to", "be", "now", "been", "made", "instead", "changed", "turned", "colored")
+# Edit complements ("make X ..."): words dropped before them, and the states they can name.
+COPULAS = ("be", "look", "become", "appear", "seem", "to", "please")
+RESIZE_WORDS = ("bigger", "smaller", "larger", "taller", "shorter", "wider", "thinner", "huge", "tiny", "big", "small",
+                "large")
+REMOVE_COMPLEMENTS = ("disappear", "vanish", "invisible", "gone", "hidden")
+STOP_COMPLEMENTS = ("stop", "halt", "freeze", "still", "stationary", "static", "motionless", "pause")
+STOP_PHRASES = (("stand", "still"), ("stay", "still"), ("not", "move"), ("stay", "put"), ("come", "to"),
+                ("keep", "still"), ("stop", "moving"))
+REVERSE_COMPLEMENTS = ("reverse", "backwards", "backward")
+REVERSE_PHRASES = (("go", "back"), ("turn", "around"), ("move", "backwards"), ("go", "backwards"),
+                   ("move", "backward"), ("go", "backward"), ("run", "backwards"))
+# Amount words around a colour or speed change ("a bit darker", "much faster").
+AMOUNT_WORDS = ("slightly", "bit", "little", "much", "alot", "lot", "far", "way", "somewhat", "tad", "even", "more",
+                "less", "a")
+# Speed edit verbs: their factor, and which way "a lot" / "a bit" pushes it.
+SPEED_VERB_FACTORS = {"speed": 2.0, "slow": 0.5, "accelerate": 2.0, "increase": 2.0, "decelerate": 0.5,
+                      "decrease": 0.5, "reduce": 0.5, "double": 2.0, "halve": 0.5, "triple": 3.0, "quadruple": 4.0}
+SPEED_UP_VERBS = ("speed", "accelerate", "increase")
+SLOW_DOWN_VERBS = ("slow", "decelerate", "decrease", "reduce")
+# "make it <verb> and ...": these verbs continue the "make" edit instead of starting a new one.
+MAKE_MOTION_VERBS = ("move", "go", "stop", "bounce", "run", "fly", "drive", "swim", "roll")
+
+# -- smaller word lists of the rule parser ----------------------------------------------------------------
+# "much darker", "a bit faster": words that push a change further, or less far.
+AMOUNT_MORE = ("much", "alot", "lot", "far", "way", "considerably")
+AMOUNT_LESS = ("slightly", "bit", "little", "somewhat", "tad", "touch")
+# "change the direction of X": attributes of a motion.
+MOTION_ATTRIBUTES = ("direction", "motion", "path", "movement", "trajectory", "velocity")
+# Words dropped after "change X" ("change it to blue", "so that it is faster").
+CHANGE_FILLERS = ("to", "into", "a", "an", "from", "so", "that", "it", "is")
+# "slow down the speed of the car": words around the speed noun.
+SPEED_NOUN_FILLERS = ("the", "speed", "of", "'s", "velocity", "pace")
+AMOUNT_FILLERS = ("a", "bit", "little", "lot", "alot", "much", "slightly", "way", "far")
+# Words dropped around a colour ("paint it in a blue color as well").
+RECOLOR_FILLERS = ("to", "into", "in", "a", "an", "the", "color", "colour", "as", "well")
+COLOUR_COMPLEMENT_FILLERS = ("a", "an", "some", "into", "in", "colored", "painted", "look")
+# "stop the motion of the dog", "stop it from moving".
+STOP_FILLERS = ("from", "moving", "motion", "the", "movement", "of")
+# Edit verbs that need their object ("go" alone is not an edit).
+MOTION_VERBS_NEEDING_OBJECT = ("go", "head", "drive", "fly", "run", "swim", "sail", "roll")
+# "make the ball blue and the cube red": verbs whose edit a second object shares.
+GAPPING_VERBS = ("make", "turn", "paint", "color", "colour", "dye")
+# Words dropped before the colour of "paint" / "tint".
+TINT_FILLERS = ("to", "into", "in", "with", "a", "an", "slightly", "bit")
+PAINT_FILLERS = ("to", "into", "in", "with", "a", "an")
+# "towards the camera", "past the camera": the camera as a landmark, not a clause subject.
+CAMERA_LANDMARK_PREPS = ("toward", "to", "at", "from", "past", "of", "into", "by")
+# Words that pan the camera, and where a camera clause names its setting.
+PAN_SIDES = ("left", "right", "leftward", "rightward", "leftwards", "rightwards")
+CAMERA_PLACE_PREPS = ("on", "in", "across", "over", "above", "at", "inside")
+# "the left of the screen": what a side belongs to.
+SIDE_FRAME_WORDS = ("the", "screen", "frame", "image", "scene", "view")
+# Words that can join a new clause ("a ball rolls and a cat runs").
+CLAUSE_JOINERS = ("and", ",", "while", "as", "whereas", "whilst", "but", "meanwhile", "plus")
+# Sides a "from X to Y" phrase can start with ("left to right").
+SIDE_STARTS = ("left", "right", "top", "bottom", "north", "south", "east", "west")
+# Words an object of a verb starts with in a description ("a dog fetches a ball").
+OBJECT_STARTS = ("a", "an", "the", "two", "three", "some")
+# "all of the objects in the scene": words after "all" / "everything" in an edit target.
+ALL_TARGET_TAIL = ("objects", "things", "the", "of", "items", "them", "in", "scene")
+OBJECT_PRONOUNS = ("it", "them", "they", "its", "their", "itself")
+EVERYTHING_WORDS = ("everything", "everybody", "everyone")
+DEMONSTRATIVES = ("this", "that", "these", "those")

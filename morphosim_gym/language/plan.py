@@ -39,15 +39,16 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field, fields
-from typing import Any, Mapping, Sequence
+from typing import Any, ClassVar, Mapping, Sequence
 
 from ..colors import color_rgb
 from ..errors import CommandError
 from .vocabulary import CATEGORIES, SETTINGS
 
 __all__ = ["MODES", "PATHS", "CAMERA_MOTIONS", "CAMERA_DIRECTIONS", "EDIT_OPS", "RECOLOR_MODES", "MAX_COUNT",
-           "ColorSpec", "ObjectSpec", "MotionSpec", "CameraSpec", "Target", "EditOp", "Plan",
-           "world_to_image"]
+           "ColorSpec", "ObjectSpec", "MotionSpec", "CameraSpec", "Target", "EditOp", "RecolorOp", "RemoveOp",
+           "ExtractOp", "ReverseOp", "RedirectOp", "SpeedOp", "StopOp", "CameraOp", "EDIT_KINDS", "EDIT_KEYS",
+           "edit_op", "Plan", "world_to_image"]
 
 MODES = ("generate", "edit")
 PATHS = ("straight", "bounce", "circle", "zigzag", "oscillate", "stop")
@@ -368,96 +369,58 @@ class Target(_Spec):
         return _build(cls, d, path)
 
 
+# Every key an edit's dict form has, in order: `to_dict` writes them all (null where a kind has no such
+# field) so that one JSON layout serves every kind, and `from_dict` accepts them all.
+EDIT_KEYS = ("op", "targets", "mode", "color", "delta", "factor_rgb", "direction_world", "path", "end", "around",
+             "clockwise", "factor", "speed", "speed_word", "camera", "direction_image", "direction_depth")
+_ABSENT: dict[str, Any] = {"direction_image": (0.0, 0.0), "direction_depth": 0.0}
+
+
 @dataclass(frozen=True)
 class EditOp(_Spec):
-    """One edit operation.
+    """Base of the edit operations: one frozen dataclass per kind (`RecolorOp`, `RemoveOp`, ...).
 
     Attributes:
-        op: one of `EDIT_OPS`.
-        targets: what it applies to (empty only for op "camera").
-        mode, color, delta, factor_rgb: recolour parameters (module docstring).
-        direction_world, path, end, around, clockwise: "redirect" parameters: a new direction and/or
-            path shape and/or an object to head to (`end`) or circle (`around`).
-            direction_image/direction_depth are derived.
-        factor: "speed": relative factor (> 0; "twice as fast" 2.0, "slow down" 0.5).
-        speed, speed_word: "speed": an absolute speed factor from an adverb ("move slowly" 0.5);
-            exactly one of factor and speed is set.
-        camera: "camera": the new camera motion.
+        op: the kind's name, one of `EDIT_OPS` (a class attribute).
+        targets: what it applies to (empty only for a `CameraOp`).
+
+    Build one by kind (`RemoveOp(targets=...)`) or by name (`edit_op("remove", targets=...)`,
+    `EditOp.from_dict(d)`). `to_dict` writes every key of `EDIT_KEYS` (null where the kind has no
+    such field).
     """
 
-    op: str
+    op: ClassVar[str] = ""
+    needs_targets: ClassVar[bool] = True
     targets: tuple[Target, ...] = ()
-    mode: str | None = None
-    color: ColorSpec | None = None
-    delta: Vec3 | None = None
-    factor_rgb: Vec3 | None = None
-    direction_world: Vec3 | None = None
-    path: str | None = None
-    end: str | None = None
-    around: str | None = None
-    clockwise: bool | None = None
-    factor: float | None = None
-    speed: float | None = None
-    speed_word: str | None = None
-    camera: CameraSpec | None = None
-    direction_image: tuple[float, float] = field(init=False)
-    direction_depth: float = field(init=False)
 
     def __post_init__(self) -> None:
-        op = _str(self.op, "edit.op", EDIT_OPS)
+        if type(self) is EditOp:
+            raise CommandError(f"Invalid plan: EditOp is the base of the edit kinds; build one of {list(EDIT_OPS)} "
+                               f"with edit_op(name, ...)")
         if not isinstance(self.targets, (tuple, list)) or not all(isinstance(t, Target) for t in self.targets):
             raise _err("edit.targets", "a list of targets", self.targets)
         object.__setattr__(self, "targets", tuple(self.targets))
-        if op == "camera":
-            if self.targets or not isinstance(self.camera, CameraSpec):
-                raise CommandError("Invalid plan: a 'camera' edit has a camera and no targets")
-        elif not self.targets:
-            raise _err("edit.targets", f"at least one target for op '{op}'", [])
-        _str(self.mode, "edit.mode", RECOLOR_MODES, optional=True)
-        if op == "recolor":
-            if self.mode is None:
-                raise _err("edit.mode", f"one of {list(RECOLOR_MODES)} for op 'recolor'", None)
-            if self.mode == "assign" and self.color is None:
-                raise _err("edit.color", "a colour for an 'assign' recolour", None)
-            if self.mode == "additive":
-                if self.delta is None:
-                    raise _err("edit.delta", "3 numbers for an 'additive' recolour", None)
-            if self.mode == "multiplicative" and self.factor_rgb is None:
-                raise _err("edit.factor_rgb", "3 numbers for a 'multiplicative' recolour", None)
-        elif self.mode is not None:
-            raise _err("edit.mode", f"null for op '{op}'", self.mode)
-        if self.delta is not None:
-            object.__setattr__(self, "delta", _vec(self.delta, "edit.delta", 3, -1.0, 1.0))
-        if self.factor_rgb is not None:
-            f = _vec(self.factor_rgb, "edit.factor_rgb", 3, 0.0, 100.0)
-            if min(f) <= 0:
-                raise _err("edit.factor_rgb", "3 numbers > 0", list(f))
-            object.__setattr__(self, "factor_rgb", f)
-        object.__setattr__(self, "direction_world", _unit(self.direction_world, "edit.direction_world"))
-        _str(self.path, "edit.path", PATHS, optional=True)
-        _str(self.end, "edit.end", optional=True)
-        _str(self.around, "edit.around", optional=True)
-        if self.clockwise is not None and not isinstance(self.clockwise, bool):
-            raise _err("edit.clockwise", "true, false or null", self.clockwise)
-        if op == "redirect" and self.direction_world is None and self.path is None and self.end is None \
-                and self.around is None:
-            raise CommandError("Invalid plan: a 'redirect' edit needs a direction, a path or an end")
-        if self.factor is not None:
-            object.__setattr__(self, "factor", _num(self.factor, "edit.factor", 0.0, MAX_SPEED, open_lo=True))
-        if self.speed is not None:
-            object.__setattr__(self, "speed", _num(self.speed, "edit.speed", 0.0, MAX_SPEED, open_lo=True))
-        if op == "speed" and (self.factor is None) == (self.speed is None):
-            raise CommandError("Invalid plan: a 'speed' edit has exactly one of factor and speed")
-        _str(self.speed_word, "edit.speed_word", optional=True)
-        img, depth = world_to_image(self.direction_world)
-        object.__setattr__(self, "direction_image", img)
-        object.__setattr__(self, "direction_depth", depth)
+        if self.needs_targets and not self.targets:
+            raise _err("edit.targets", f"at least one target for op '{self.op}'", [])
+        self._check()
+
+    def _check(self) -> None:
+        """Validate (and normalise) the kind's own fields."""
+
+    def to_dict(self) -> dict:
+        """The dict form: every key of `EDIT_KEYS`, null where this kind has no such field."""
+        return {k: _plain(self.op if k == "op" else getattr(self, k, _ABSENT.get(k))) for k in EDIT_KEYS}
 
     @classmethod
     def from_dict(cls, d: Any, path: str = "edit") -> "EditOp":
-        d = dict(_check_keys(d, cls, path))
-        d.pop("direction_image", None)
-        d.pop("direction_depth", None)
+        """Build and validate the edit of a dict (its ``op`` picks the kind)."""
+        if not isinstance(d, Mapping):
+            raise _err(path, "an object (dict)", d)
+        for k in d:
+            if k not in EDIT_KEYS:
+                raise CommandError(f"Invalid plan: unknown key {path}.{k}; expected keys of EditOp: "
+                                   f"{sorted(EDIT_KEYS)}")
+        d = {k: v for k, v in d.items() if k not in _ABSENT}
         targets = d.get("targets", [])
         if not isinstance(targets, (list, tuple)):
             raise _err(f"{path}.targets", "a list", targets)
@@ -466,7 +429,154 @@ class EditOp(_Spec):
             d["color"] = ColorSpec.from_dict(d["color"], f"{path}.color")
         if d.get("camera") is not None:
             d["camera"] = CameraSpec.from_dict(d["camera"], f"{path}.camera")
-        return _build(cls, d, path)
+        return _build(edit_op, d, path)
+
+
+@dataclass(frozen=True)
+class RecolorOp(EditOp):
+    """Change colours. mode "assign" (`color`), "additive" (`delta`, `color` names it) or
+    "multiplicative" (`factor_rgb`); see the module docstring."""
+
+    op: ClassVar[str] = "recolor"
+    mode: str | None = None
+    color: ColorSpec | None = None
+    delta: Vec3 | None = None
+    factor_rgb: Vec3 | None = None
+
+    def _check(self) -> None:
+        _str(self.mode, "edit.mode", RECOLOR_MODES, optional=True)
+        if self.mode is None:
+            raise _err("edit.mode", f"one of {list(RECOLOR_MODES)} for op 'recolor'", None)
+        if self.mode == "assign" and self.color is None:
+            raise _err("edit.color", "a colour for an 'assign' recolour", None)
+        if self.mode == "additive" and self.delta is None:
+            raise _err("edit.delta", "3 numbers for an 'additive' recolour", None)
+        if self.mode == "multiplicative" and self.factor_rgb is None:
+            raise _err("edit.factor_rgb", "3 numbers for a 'multiplicative' recolour", None)
+        if self.delta is not None:
+            object.__setattr__(self, "delta", _vec(self.delta, "edit.delta", 3, -1.0, 1.0))
+        if self.factor_rgb is not None:
+            f = _vec(self.factor_rgb, "edit.factor_rgb", 3, 0.0, 100.0)
+            if min(f) <= 0:
+                raise _err("edit.factor_rgb", "3 numbers > 0", list(f))
+            object.__setattr__(self, "factor_rgb", f)
+
+
+@dataclass(frozen=True)
+class RemoveOp(EditOp):
+    """Delete the targets from the scene."""
+
+    op: ClassVar[str] = "remove"
+
+
+@dataclass(frozen=True)
+class ExtractOp(EditOp):
+    """Keep only the targets."""
+
+    op: ClassVar[str] = "extract"
+
+
+@dataclass(frozen=True)
+class ReverseOp(EditOp):
+    """Play the targets' motion backwards."""
+
+    op: ClassVar[str] = "reverse"
+
+
+@dataclass(frozen=True)
+class StopOp(EditOp):
+    """Freeze the targets at their first pose."""
+
+    op: ClassVar[str] = "stop"
+
+
+def _check_speed(op: Any, required: bool) -> None:
+    """`factor` (relative) and `speed` (absolute) in (0, MAX_SPEED]; exactly one when `required`."""
+    if op.factor is not None:
+        object.__setattr__(op, "factor", _num(op.factor, "edit.factor", 0.0, MAX_SPEED, open_lo=True))
+    if op.speed is not None:
+        object.__setattr__(op, "speed", _num(op.speed, "edit.speed", 0.0, MAX_SPEED, open_lo=True))
+    if required and (op.factor is None) == (op.speed is None):
+        raise CommandError("Invalid plan: a 'speed' edit has exactly one of factor and speed")
+    _str(op.speed_word, "edit.speed_word", optional=True)
+
+
+@dataclass(frozen=True)
+class RedirectOp(EditOp):
+    """A new direction and/or path shape and/or an object to head to (`end`) or circle (`around`);
+    optionally a speed change too (`factor` or `speed`). direction_image/direction_depth are derived."""
+
+    op: ClassVar[str] = "redirect"
+    direction_world: Vec3 | None = None
+    path: str | None = None
+    end: str | None = None
+    around: str | None = None
+    clockwise: bool | None = None
+    factor: float | None = None
+    speed: float | None = None
+    speed_word: str | None = None
+    direction_image: tuple[float, float] = field(init=False)
+    direction_depth: float = field(init=False)
+
+    def _check(self) -> None:
+        object.__setattr__(self, "direction_world", _unit(self.direction_world, "edit.direction_world"))
+        _str(self.path, "edit.path", PATHS, optional=True)
+        _str(self.end, "edit.end", optional=True)
+        _str(self.around, "edit.around", optional=True)
+        if self.clockwise is not None and not isinstance(self.clockwise, bool):
+            raise _err("edit.clockwise", "true, false or null", self.clockwise)
+        if self.direction_world is None and self.path is None and self.end is None and self.around is None:
+            raise CommandError("Invalid plan: a 'redirect' edit needs a direction, a path or an end")
+        _check_speed(self, required=False)
+        img, depth = world_to_image(self.direction_world)
+        object.__setattr__(self, "direction_image", img)
+        object.__setattr__(self, "direction_depth", depth)
+
+
+@dataclass(frozen=True)
+class SpeedOp(EditOp):
+    """Change speed: a relative `factor` ("twice as fast" 2.0) or an absolute `speed` from an adverb
+    ("move slowly" 0.5, `speed_word` its words); exactly one of the two."""
+
+    op: ClassVar[str] = "speed"
+    factor: float | None = None
+    speed: float | None = None
+    speed_word: str | None = None
+
+    def _check(self) -> None:
+        _check_speed(self, required=True)
+
+
+@dataclass(frozen=True)
+class CameraOp(EditOp):
+    """A new camera motion (`camera`); no targets."""
+
+    op: ClassVar[str] = "camera"
+    needs_targets: ClassVar[bool] = False
+    camera: CameraSpec | None = None
+
+    def _check(self) -> None:
+        if self.targets or not isinstance(self.camera, CameraSpec):
+            raise CommandError("Invalid plan: a 'camera' edit has a camera and no targets")
+
+
+EDIT_KINDS: dict[str, type[EditOp]] = {k.op: k for k in (RecolorOp, RemoveOp, ExtractOp, ReverseOp, RedirectOp,
+                                                          SpeedOp, StopOp, CameraOp)}
+_INIT_FIELDS = {k: frozenset(f.name for f in fields(k) if f.init) for k in EDIT_KINDS.values()}
+
+
+def edit_op(op: Any, **fields_: Any) -> EditOp:
+    """The edit of kind `op` (a name of `EDIT_OPS`) with the given fields; a field another kind has
+    may be given as None (the dict form has them all), any other value is an error naming it."""
+    kind = EDIT_KINDS[_str(op, "edit.op", EDIT_OPS)]  # type: ignore[index]
+    own = _INIT_FIELDS[kind]
+    for k, v in fields_.items():
+        if k not in own:
+            if k not in EDIT_KEYS:
+                raise CommandError(f"Invalid plan: unknown key edit.{k}; expected keys of EditOp: {sorted(EDIT_KEYS)}")
+            if v is not None:
+                raise _err(f"edit.{k}", f"null for op '{op}'", v)
+    return kind(**{k: v for k, v in fields_.items() if k in own})
 
 
 @dataclass(frozen=True)
@@ -505,41 +615,7 @@ class Plan(_Spec):
                 raise _err(f"plan.{name}", f"a list of {cls.__name__}", v)
             object.__setattr__(self, name, tuple(v))
         _str(self.backend, "plan.backend", ("rules", "llm"))
-        if self.mode == "generate":
-            if self.edits:
-                raise CommandError("Invalid plan: a generate plan has no edits (put them in 'then')")
-            if self.camera is None:
-                object.__setattr__(self, "camera", CameraSpec())
-            if self.setting is None:
-                object.__setattr__(self, "setting", "ground")
-                object.__setattr__(self, "setting_source", self.setting_source or "default")
-            _str(self.setting, "plan.setting", list(SETTINGS))
-            _str(self.setting_source, "plan.setting_source", ("text", "inferred", "default"), optional=True)
-            if self.setting_source is None:
-                object.__setattr__(self, "setting_source", "text")
-            if not self.objects and self.setting_source != "text":
-                raise CommandError("Invalid plan: a generate plan needs at least one object or a named setting")
-            names = [o.name for o in self.objects]
-            if len(set(names)) != len(names):
-                raise _err("plan.objects", "objects with unique names", names)
-            moved = [m.target for m in self.motions]
-            if len(set(moved)) != len(moved):
-                raise _err("plan.motions", "at most one motion per object", moved)
-            for m in self.motions:
-                for key in ("target", "start", "end", "around"):
-                    ref = getattr(m, key)
-                    if ref is not None and ref not in names:
-                        raise _err(f"plan.motions[{m.target}].{key}", f"the name of an object of the plan {names}", ref)
-            if self.camera.target is not None and self.camera.target not in names:
-                raise _err("plan.camera.target", f"the name of an object of the plan {names} or null",
-                           self.camera.target)
-            known = set(names)
-        else:
-            if self.objects or self.motions or self.camera is not None or self.setting is not None:
-                raise CommandError("Invalid plan: an edit plan has only edits (no objects, motions, camera, setting)")
-            if not self.edits:
-                raise _err("plan.edits", "at least one edit for an edit plan", [])
-            known = None
+        known = self._check_generate() if self.mode == "generate" else self._check_edit()
         for i, p in enumerate(self.then):
             if p.mode != "edit" or p.then:
                 raise _err(f"plan.then[{i}]", "an edit plan without its own 'then'", p.mode)
@@ -551,6 +627,42 @@ class Plan(_Spec):
                         if bad:
                             raise _err(f"plan.then[{i}] target objects", f"names of objects of the plan {sorted(known)}",
                                        bad)
+
+    def _check_generate(self) -> set[str]:
+        """Defaults and cross-references of a generate plan; the names of its objects."""
+        if self.edits:
+            raise CommandError("Invalid plan: a generate plan has no edits (put them in 'then')")
+        if self.camera is None:
+            object.__setattr__(self, "camera", CameraSpec())
+        if self.setting is None:
+            object.__setattr__(self, "setting", "ground")
+            object.__setattr__(self, "setting_source", self.setting_source or "default")
+        _str(self.setting, "plan.setting", list(SETTINGS))
+        _str(self.setting_source, "plan.setting_source", ("text", "inferred", "default"), optional=True)
+        if self.setting_source is None:
+            object.__setattr__(self, "setting_source", "text")
+        if not self.objects and self.setting_source != "text":
+            raise CommandError("Invalid plan: a generate plan needs at least one object or a named setting")
+        names = [o.name for o in self.objects]
+        if len(set(names)) != len(names):
+            raise _err("plan.objects", "objects with unique names", names)
+        moved = [m.target for m in self.motions]
+        if len(set(moved)) != len(moved):
+            raise _err("plan.motions", "at most one motion per object", moved)
+        for m in self.motions:
+            for key in ("target", "start", "end", "around"):
+                ref = getattr(m, key)
+                if ref is not None and ref not in names:
+                    raise _err(f"plan.motions[{m.target}].{key}", f"the name of an object of the plan {names}", ref)
+        if self.camera.target is not None and self.camera.target not in names:
+            raise _err("plan.camera.target", f"the name of an object of the plan {names} or null", self.camera.target)
+        return set(names)
+
+    def _check_edit(self) -> None:
+        if self.objects or self.motions or self.camera is not None or self.setting is not None:
+            raise CommandError("Invalid plan: an edit plan has only edits (no objects, motions, camera, setting)")
+        if not self.edits:
+            raise _err("plan.edits", "at least one edit for an edit plan", [])
 
     # -- JSON ---------------------------------------------------------------------------------
 

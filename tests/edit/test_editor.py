@@ -137,3 +137,10 @@ def test_colour_picks_among_numbered_objects_of_one_noun(sim):
     assert green.object("ball_2").color != scene.object("ball_2").color
     assert green.object("ball").color == scene.object("ball").color
     assert [o.name for o in sim.edit(scene, "delete the ball").objects if o.category == "ball"] == ["ball_2"]
+
+
+def test_the_editor_has_a_handler_for_every_edit_kind():
+    from morphosim_gym.edit import editor
+    from morphosim_gym.language.plan import EDIT_KINDS
+
+    assert set(editor._HANDLERS) == set(EDIT_KINDS.values())

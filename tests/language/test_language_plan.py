@@ -6,7 +6,8 @@ import math
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.language.plan import (CameraSpec, ColorSpec, EditOp, MotionSpec, ObjectSpec, Plan, Target,
+from morphosim_gym.language.plan import (EDIT_KEYS, EDIT_KINDS, EDIT_OPS, CameraOp, CameraSpec, ColorSpec, EditOp,
+                                         MotionSpec, ObjectSpec, Plan, RemoveOp, SpeedOp, Target, edit_op,
                                          world_to_image)
 
 
@@ -84,7 +85,9 @@ def test_dataclasses_are_frozen_and_validated():
     with pytest.raises(ms.CommandError):
         MotionSpec("ball", direction_world=(0, 0, 0))
     with pytest.raises(ms.CommandError):
-        EditOp("camera", targets=(Target("it", "ball"),), camera=CameraSpec("orbit"))
+        CameraOp(targets=(Target("it", "ball"),), camera=CameraSpec("orbit"))
+    with pytest.raises(ms.CommandError):
+        edit_op("camera", targets=(Target("it", "ball"),), camera=CameraSpec("orbit"))
     o = ObjectSpec("ball", "ball", "ball")
     with pytest.raises(Exception):
         o.count = 3  # type: ignore[misc]
@@ -101,3 +104,36 @@ def test_recolor_parameters_for_the_editor():
     assert e.mode == "multiplicative" and e.factor_rgb == (0.6, 0.6, 0.6)
     e = ms.parse("make the ball half as bright").edits[0]
     assert e.factor_rgb == (0.5, 0.5, 0.5)
+
+
+def test_one_edit_kind_per_op_name():
+    assert tuple(EDIT_KINDS) == EDIT_OPS
+    for name, kind in EDIT_KINDS.items():
+        assert kind.op == name and issubclass(kind, EditOp)
+    with pytest.raises(ms.CommandError, match="EditOp is the base"):
+        EditOp(targets=(Target("ball", "ball"),))
+    with pytest.raises(ms.CommandError, match="edit.op"):
+        edit_op("teleport", targets=(Target("ball", "ball"),))
+
+
+def test_an_edit_kind_checks_only_its_own_fields():
+    t = (Target("ball", "ball"),)
+    assert isinstance(edit_op("remove", targets=t, path=None, factor=None), RemoveOp)
+    with pytest.raises(ms.CommandError, match="edit.path to be null for op 'remove'"):
+        edit_op("remove", targets=t, path="circle")
+    with pytest.raises(ms.CommandError, match=r"plan.edits\[0\].mode to be null for op .speed."):
+        Plan.from_dict({"mode": "edit", "edits": [{"op": "speed", "targets": ["ball"], "factor": 2,
+                                                    "mode": "assign"}]})
+    with pytest.raises(ms.CommandError, match="exactly one of factor and speed"):
+        SpeedOp(targets=t)
+    assert not hasattr(RemoveOp(targets=t), "factor")
+
+
+def test_every_edit_kind_writes_the_same_dict_layout():
+    plan = ms.parse("make the ball blue and reverse its motion, then move it left and make it twice as fast; "
+                    "then pan left; then delete the ball")
+    for e in plan.all_edits():
+        d = e.to_dict()
+        assert tuple(d) == EDIT_KEYS and d["op"] == e.op
+        assert EditOp.from_dict(d) == e
+    assert isinstance(plan.then[-2].edits[0], CameraOp)
