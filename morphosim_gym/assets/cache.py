@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..scene.gaussians import Gaussians
-from .atomic import atomic_write
+from ..scene.atomic import atomic_write_stream
 from .errors import AssetWarning
 
 __all__ = ["ConversionCache"]
@@ -71,4 +71,4 @@ class ConversionCache:
         g = gaussians.numpy()
         arrays = {name: np.ascontiguousarray(getattr(g, name), dtype=np.float32) for name in _ARRAYS}
         digest = np.frombuffer(_digest(arrays), dtype=np.uint8)
-        return atomic_write(self.path(key), lambda f: np.savez(f, digest=digest, **arrays))
+        return atomic_write_stream(self.path(key), lambda f: np.savez(f, digest=digest, **arrays))

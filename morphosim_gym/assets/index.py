@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_write, atomic_write_text
+from ..scene.atomic import atomic_write_stream, atomic_write_text
 from .errors import AssetWarning
 from .record import AssetRecord
 from .search import EmbedFn, rank
@@ -178,7 +178,7 @@ class AssetIndex:
                     raise ValueError(f"Expected embed() to return [{len(texts)}, D], found {vecs.shape}")
                 if path is not None:
                     try:
-                        atomic_write(path, lambda f: np.save(f, vecs))
+                        atomic_write_stream(path, lambda f: np.save(f, vecs))
                     except OSError as exc:
                         warnings.warn(AssetWarning(f"Could not cache embeddings in {path} ({exc})"), stacklevel=2)
             self._vectors[embed] = vecs

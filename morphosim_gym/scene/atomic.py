@@ -12,9 +12,11 @@ import re
 import socket
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO
 
-__all__ = ["STALE_TEMP_SECONDS", "atomic_write", "sweep_stale_temps"]
+__all__ = ["STALE_TEMP_SECONDS", "atomic_write", "atomic_write_stream", "atomic_write_text", "sweep_stale_temps"]
 
 STALE_TEMP_SECONDS = 15 * 60      # no write of one file takes this long
 _DEAD_GRACE_SECONDS = 2.0          # a temp file is created a moment before its writer is recorded
@@ -27,13 +29,27 @@ def _host() -> str:
 
 def atomic_write(path: str | os.PathLike, chunks: list[bytes]) -> Path:
     """Write `chunks` to `path` so readers see the old file or the whole new one, never a part."""
+    def write(fh: IO[bytes]) -> None:
+        for c in chunks:
+            fh.write(c)
+
+    return atomic_write_stream(path, write)
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write UTF-8 `text` to `path` atomically."""
+    return atomic_write(path, [text.encode("utf-8")])
+
+
+def atomic_write_stream(path: str | os.PathLike, write: Callable[[IO[bytes]], None]) -> Path:
+    """Create `path` atomically: `write(fh)` fills a temporary file that then replaces `path`. If
+    `write` raises, the temporary is removed and `path` is left as it was."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{_host()}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
-            for c in chunks:
-                fh.write(c)
+            write(fh)
             fh.flush()
             os.fsync(fh.fileno())
         umask = os.umask(0)
