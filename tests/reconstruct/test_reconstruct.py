@@ -82,8 +82,16 @@ def test_deterministic_and_cached(clip, tmp_path):
 def test_bad_clips_fail_before_any_work(clip):
     no_depth = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, masks=clip.masks,
                                 labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
-    with pytest.raises(ValueError, match="depth"):
-        reconstruct(no_depth, FAST)
+    # a missing prior is estimated from the frames (and the clip's info says so), never refused
+    from morphosim_gym.priors import prepare_priors
+
+    filled = prepare_priors(no_depth)
+    assert filled.depth is not None and filled.depth.shape == clip.depth.shape and np.any(filled.depth > 0)
+    assert filled.info["priors"] == {"depth": "estimated", "masks": "clip", "tracks": "clip"}
+    with pytest.raises(ValueError, match="priors"):
+        replace(FAST, priors="oracle")
+    with pytest.raises(ValueError, match=r"missing \['depth'\]"):
+        prepare_priors(no_depth, "ground_truth")
     zero = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, depth=np.zeros_like(clip.depth),
                             masks=clip.masks, labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
     with pytest.raises(ValueError, match="positive depth"):
