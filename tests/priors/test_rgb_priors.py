@@ -34,13 +34,14 @@ def test_moving_object_is_found_and_labelled_from_the_plan():
     assert labels[0] == "road" and labels[1] == "bus"
     truth = np.zeros(masks.shape, bool)
     for i, b in enumerate(boxes):
-        truth[i, 24:36, int(round(b[0] * 64)):int(round(b[0] * 64)) + 10] = True
+        x0 = round(b[0] * 64)
+        truth[i, 24:36, x0:x0 + 10] = True
     pred = masks == 1
     assert (pred & truth).sum() / (pred | truth).sum() > 0.8
 
 
 def test_nothing_moving_and_a_single_frame_give_only_the_setting():
-    frames, boxes = _moving_square(still=True)
+    frames, _ = _moving_square(still=True)
     est = RGBPriorEstimators()
     masks, labels = est.masks(frames, None, [], cameras=[_camera()] * len(frames))
     assert set(np.unique(masks)) <= {-1, 0} and labels.get(0) == "ground"
@@ -78,3 +79,14 @@ def test_a_clip_of_frames_and_cameras_gets_every_prior_estimated():
     assert clip.depth is None                      # the caller's clip is left as it was
     with pytest.raises(ValueError, match="priors source"):
         prepare_priors(clip, "oracle")
+
+
+def test_bad_priors_name_the_field():
+    frames, _ = _moving_square()
+    cam = _camera()
+    tracks = np.zeros((4, len(frames), 2), np.float32)
+    tracks[0, 3] = np.nan
+    with pytest.raises(ValueError, match="finite tracks"):
+        GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, tracks=tracks)
+    with pytest.raises(ValueError, match="depth of shape"):
+        GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, depth=np.ones((2, 48, 64), np.float32))
