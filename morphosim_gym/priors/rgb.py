@@ -23,8 +23,8 @@ class RGBPriorEstimators:
     """Priors from the frames and cameras alone.
 
     - masks: moving regions (`masks.motion_foreground`) labelled with the plan's moving objects
-      (`masks.label_regions`); other pixels below the horizon are the setting (id 0, label
-      `setting_label`), above it background (-1). Attention maps are not used. Static objects
+      (`masks.label_regions`); the other pixels are the setting (id 0, label `setting_label`;
+      above the horizon only with `backdrop`, else -1). Attention maps are not used. Static objects
       other than the setting are not found (they join the setting).
     - depth: the ground plane z = `ground_height` for the setting; each object region gets the
       ground depth where its lowest pixels meet the ground (objects stand on the ground), or the
@@ -38,6 +38,9 @@ class RGBPriorEstimators:
         fb_threshold: forward-backward check tolerance in pixels.
         box_margin: planned boxes grow by this fraction of their size before labelling.
         setting_label: label of id 0.
+        backdrop: pixels above the horizon are part of the setting, at the depth of the farthest
+            ground seen (a backdrop: a generated frame draws something there); False leaves them
+            unknown (depth 0, mask -1).
     """
 
     ground_height: float = 0.0
@@ -46,6 +49,7 @@ class RGBPriorEstimators:
     fb_threshold: float = 1.0
     box_margin: float = 0.25
     setting_label: str = "ground"
+    backdrop: bool = True
 
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
@@ -58,6 +62,10 @@ class RGBPriorEstimators:
         t = len(frames)
         cams = self._cameras(camera, t)
         out = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) for c in cams])
+        if self.backdrop:
+            # above the horizon: a backdrop as far as the farthest ground seen
+            far = float(out.max()) if np.any(out > 0) else self.max_depth
+            out = np.where(out > 0, out, far).astype(np.float32)
         if masks is None:
             return out
         valid = out[out > 0]
@@ -78,7 +86,7 @@ class RGBPriorEstimators:
         fg = motion_foreground(f, cameras, targets, self.ground_height, self.box_margin)
         ids, labels = label_regions(fg, targets, self.box_margin, frames=f)
         ids = ids.copy()
-        if cameras is not None:
+        if cameras is not None and not self.backdrop:
             below = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) > 0
                               for c in self._cameras(cameras, t)])
         else:
