@@ -109,6 +109,15 @@ def _covered(clip: GeneratedClip, frame: int, points: np.ndarray, tolerance: flo
     return out
 
 
+def _is_setting(label: str) -> bool:
+    """True for the label of a setting ("road", "table", "grass"...): the ground never moves,
+    whatever estimated tracks on it seem to say (drift, a moving camera's parallax)."""
+    from ..language.vocabulary import noun_to_category, word_to_setting
+
+    text = label.lower()
+    return bool(word_to_setting(text)) and not noun_to_category(text)
+
+
 def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
     """The static instance that pixels with a depth but no instance are lifted into (the
     setting, e.g. particles in the water), or None to leave them out: the static instance named
@@ -150,7 +159,8 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
         travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
         limit = max(cfg.static_pixels, cfg.noise_factor * track_noise(clip, instance_tracks(clip, inst))) \
             if clip.tracks is not None else cfg.static_pixels
-        dynamic[inst] = bool(travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
+        dynamic[inst] = bool(not _is_setting(clip.labels.get(inst, ""))
+                             and travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
                              and static_residual(clip, inst, ref) > limit)
         reference[inst] = ref
         poses[inst] = (rots, trans)
