@@ -10,9 +10,14 @@
 3. The agent loop tries a range of thresholds on that relevance, renders each candidate
    selection from the generation camera at a few times (one pass, one channel per
    candidate), scores it (default `MaskAgreementScorer`: agreement with the 2D map of the
-   target — the pixels the scene's own instance map gives to the matched objects — and
-   consistency of the selected area over time; an LLM/VLM judge can implement the same
-   `CandidateScorer` interface) and keeps the best.
+   target, and consistency of the selected area over time; an LLM/VLM judge can implement the
+   same `CandidateScorer` interface) and keeps the best. The 2D map is evidence independent
+   of the Gaussians' own object ids: the feature field queried per pixel (the rendered latents
+   of the same pass, decoded and softmaxed over the prompt set like the Gaussians' relevance;
+   the field was distilled from the clip's 2D masks, and rendering blends the latents of
+   every Gaussian a pixel sees, so a threshold that keeps too few or too many Gaussians
+   disagrees with it), or 2D masks given by the caller (`evidence`: e.g. the estimated masks
+   of the input views).
 Scenes without a feature field (e.g. the generator's ground truth) select the matched objects'
 Gaussians by their object ids. Results are cached per scene geometry and query, so a second
 edit of the same target (a recolour after a recolour, say) skips all of this.
@@ -34,6 +39,7 @@ __all__ = ["Selection", "CandidateScorer", "MaskAgreementScorer", "Selector", "D
 
 DEFAULT_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 GROW_FLOOR = 0.05   # own relevance a Gaussian needs before its neighbourhood can raise it
+TIE = 0.01          # candidate scores this close to the best count as ties
 
 
 @dataclass
@@ -109,16 +115,24 @@ class Selector:
         self._lock = threading.Lock()
 
     # ------------------------------------------------------------------ api
-    def select(self, scene: Scene4D, object_ids: Sequence[int], query: str) -> Selection:
-        """The Gaussians of `scene` meaning `query`, which the parser resolved to `object_ids`."""
+    def select(self, scene: Scene4D, object_ids: Sequence[int], query: str,
+               evidence: np.ndarray | None = None) -> Selection:
+        """The Gaussians of `scene` meaning `query`, which the parser resolved to `object_ids`.
+        `evidence`: optional [times, H, W] bool 2D maps of the target at the selector's times
+        (`np.linspace(0, duration, times)`), seen from the generation camera; by default the
+        feature field's own per-pixel query."""
         ids = tuple(sorted(int(i) for i in object_ids))
-        key = self._key(scene, ids, query)
+        if evidence is not None:
+            evidence = np.asarray(evidence, bool)
+            if evidence.ndim != 3 or len(evidence) != max(1, self.times):
+                raise ValueError(f"Expected evidence as [{max(1, self.times)}, H, W] bool, found {evidence.shape}")
+        key = self._key(scene, ids, query) + ((None,) if evidence is None else (evidence.tobytes(),))
         with self._lock:
             hit = self._cache.get(key)
         if hit is not None:
             return hit
         has_field = "semantic" in scene.decoders and scene.gaussians.features is not None
-        sel = self._feature_field(scene, ids, query) if has_field else Selection(
+        sel = self._feature_field(scene, ids, query, evidence) if has_field else Selection(
             np.isin(scene.gaussians.object_ids, ids), ids, "object_ids")
         with self._lock:
             self._cache[key] = sel
@@ -157,21 +171,25 @@ class Selector:
             for k in [k for k in self._cache if array_id in k[:3]]:
                 del self._cache[k]
 
-    def relevance(self, scene: Scene4D, ids: Sequence[int], query: str) -> np.ndarray:
-        """[N] probability mass, per Gaussian, of the prompts that mean the target."""
+    def relevance(self, scene: Scene4D, ids: Sequence[int], query: str, features: np.ndarray | None = None
+                  ) -> np.ndarray:
+        """[N] probability mass, per Gaussian (or per row of `features`, latents such as rendered
+        pixels), of the prompts that mean the target."""
         from ..language import embeddings
 
         names = [o.name for o in scene.objects]
         prompts = names + [query]
         emb = embeddings.embed(prompts)                                       # [P, 384]
-        s = scene.decoders["semantic"].similarity(scene.gaussians.features, emb) / self.temperature   # [N, P] cosine
+        f = scene.gaussians.features if features is None else features
+        s = scene.decoders["semantic"].similarity(f, emb) / self.temperature   # [N, P] cosine
         s -= s.max(axis=1, keepdims=True)
         p = np.exp(s)
         p /= p.sum(axis=1, keepdims=True)
         wanted = [i for i, o in enumerate(scene.objects) if o.id in set(ids)] + [len(prompts) - 1]
         return p[:, wanted].sum(axis=1)
 
-    def _feature_field(self, scene: Scene4D, ids: tuple[int, ...], query: str) -> Selection:
+    def _feature_field(self, scene: Scene4D, ids: tuple[int, ...], query: str,
+                       evidence: np.ndarray | None = None) -> Selection:
         rel = self.relevance(scene, ids, query)
         times = np.linspace(0.0, scene.duration, max(1, self.times))
         # two candidate families: the relevance itself, and the relevance raised to its spatial
@@ -185,14 +203,32 @@ class Selector:
         grown = np.where(rel >= GROW_FLOOR, np.maximum(rel, near), rel)
         levels = [(t, rel) for t in self.thresholds] + [(t, grown) for t in self.thresholds]
         cands = np.stack([r >= t for t, r in levels], axis=1).astype(np.float32)         # [N, C]
+        latents = np.asarray(scene.gaussians.features, np.float32)
         soft, target = [], []
-        for t, state in zip(times, states):
-            out = render(_with_features(state, cands), scene.camera_at(t), backend=self.backend,
-                         features=True, background=scene.background)
-            soft.append(out.features / np.maximum(out.alpha[..., None], 1e-6))
-            target.append(np.isin(out.instance, ids))
-        scores = self.scorer(np.stack(soft), np.stack(target))
-        best = int(np.argmax(scores))
+        for k, (t, state) in enumerate(zip(times, states)):
+            # one pass: the candidates' coverage and the rendered latents (for the 2D evidence)
+            out = render(_with_features(state, np.concatenate([cands, latents], axis=1)), scene.camera_at(t),
+                         backend=self.backend, features=True, background=scene.background)
+            norm = out.features / np.maximum(out.alpha[..., None], 1e-6)
+            soft.append(norm[..., :cands.shape[1]])
+            if evidence is not None:
+                target.append(evidence[k])
+                continue
+            pix = norm[..., cands.shape[1]:].reshape(-1, latents.shape[1])
+            covered = out.alpha.reshape(-1) > 0.5
+            mass = np.zeros(len(pix))
+            if covered.any():
+                mass[covered] = self.relevance(scene, ids, query, pix[covered])
+            target.append((mass >= 0.5).reshape(out.alpha.shape))
+        soft_maps = np.stack(soft)
+        target_maps = np.stack(target)
+        if target_maps.shape != soft_maps.shape[:3]:
+            raise ValueError(f"Expected evidence of shape {soft_maps.shape[:3]}, found {target_maps.shape}")
+        scores = np.asarray(self.scorer(soft_maps, target_maps), np.float64)
+        # among the candidates within TIE of the best score, the most inclusive: Gaussians that
+        # no rendered view shows (inside the object, behind it) cannot change the score
+        near = np.flatnonzero(scores >= scores.max() - TIE)
+        best = int(near[np.argmax(cands[:, near].sum(axis=0))])
         return Selection(cands[:, best] > 0.5, ids, "feature_field", levels[best][0],
                          [(t, float(s)) for (t, _), s in zip(levels, scores)], rel)
 

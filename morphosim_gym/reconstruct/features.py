@@ -201,6 +201,48 @@ def _encoders(cfg: FeatureConfig) -> list:
     return out
 
 
+def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Sequence[PixelEncoder], dim: int,
+                     rng: np.random.Generator, frames: int = 12, depth_tolerance: float = 0.05) -> np.ndarray:
+    """[N, dim] starting latents from what the frames show, never from the Gaussians' instance ids:
+    a fixed random projection of each Gaussian's Lab colour, plus a random projection of the
+    semantic encoder's pixel feature where the Gaussian's centre lands, within `depth_tolerance`
+    of the depth prior (so it is seen there, not hidden), in one of `frames` frames spread over
+    the clip (averaged over those frames), plus noise. Gaussians that no view shows start from their colour alone."""
+    with torch.no_grad():
+        rgb = model.colors().detach().numpy().astype(np.float64)
+    lab = rgb_to_lab(rgb) / np.array([50.0, 64.0, 64.0]) - np.array([1.0, 0.0, 0.0])
+    init = 0.3 * lab @ rng.normal(size=(3, dim)) + 0.05 * rng.normal(size=(len(lab), dim))
+    sem = next((e for e in encoders if e.name == "semantic"), None)
+    if sem is None or clip.masks is None:
+        return init
+    proj = rng.normal(size=(sem.dim, dim))
+    seen = np.zeros(len(lab), bool)
+    code = np.zeros_like(init)
+    hits = np.zeros(len(lab))
+    H, W = clip.height, clip.width
+    for t in sorted(set(np.linspace(0, clip.num_frames - 1, max(1, frames)).round().astype(int).tolist())):
+        with torch.no_grad():
+            means, _ = model.warp(t)
+        uv, z = clip.cameras[t].project(means.detach().numpy().astype(np.float64))
+        with np.errstate(invalid="ignore"):
+            c, r = np.floor(uv[:, 0]), np.floor(uv[:, 1])
+            ok = (z > clip.cameras[t].near) & (c >= 0) & (c < W) & (r >= 0) & (r < H)
+        feat, valid = sem.encode(clip, t)
+        idx = np.flatnonzero(ok)
+        ci, ri = c[idx].astype(int), r[idx].astype(int)
+        if clip.depth is not None:                  # visible there: at the depth prior's depth
+            prior = clip.depth[t, ri, ci]
+            valid_here = valid[ri, ci] & (np.abs(z[idx] - prior) <= depth_tolerance * prior)
+        else:
+            valid_here = valid[ri, ci]
+        idx, ci, ri = idx[valid_here], ci[valid_here], ri[valid_here]
+        code[idx] += feat[ri, ci].astype(np.float64) @ proj
+        hits[idx] += 1
+        seen[idx] = True
+    code[seen] /= hits[seen, None]
+    return init + code
+
+
 def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: FeatureConfig | None = None,
                      seed: int = 0, encoders: Sequence[PixelEncoder] | None = None) -> tuple[dict[str, FeatureDecoder], dict]:
     """Learn per-Gaussian latents (set as `model.features`) and one decoder per encoder, with the
@@ -210,11 +252,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     T, H, W = clip.num_frames, clip.height, clip.width
-    # latent init: one random code per instance (from the masks each Gaussian was lifted from) plus noise,
-    # so Gaussians that no view ever shows still decode like their instance
-    ids = model.object_ids.numpy()
-    codes = {int(i): rng.normal(size=cfg.dim) for i in np.unique(ids)}
-    init = np.stack([codes[int(i)] for i in ids]) + 0.05 * rng.normal(size=(len(ids), cfg.dim))
+    init = _initial_latents(model, clip, encs, cfg.dim, rng)
     model.features = nn.Parameter(torch.as_tensor(init, dtype=torch.float32))
     decoders = nn.ModuleList([MLP(cfg.dim, e.dim, cfg.hidden) for e in encs])
     opt = torch.optim.Adam([{"params": [model.features], "lr": cfg.lr_features},

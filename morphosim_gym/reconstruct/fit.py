@@ -32,6 +32,8 @@ class FitConfig:
         lr_node_trans: node translation learning rate, times the median scene depth.
         lr_node_quats: node rotation learning rate.
         w_ssim, w_depth, w_mask, w_mask_iou, w_empty, w_track, w_arap, w_smooth: loss weights.
+        depth_trim: fraction of each frame's largest relative depth errors left out of the depth term.
+        track_delta: Huber threshold (pixels) of the track term (0: L1).
         lr_decay: the position and node-pose learning rates decay exponentially to this fraction
             of their start by the last iteration. Adam takes steps of about the learning rate
             whatever the gradient, so at a constant rate each frame's node pose keeps jittering
@@ -58,6 +60,8 @@ class FitConfig:
     w_arap: float = 1.0
     w_smooth: float = 1.0
     lr_decay: float = 0.03
+    depth_trim: float = 0.1
+    track_delta: float = 1.0
     strategy: Strategy = field(default_factory=Strategy)
     backend: str = "cpu"
     progress: bool = True
@@ -212,7 +216,7 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         rgb, depth, alpha, soft = out["rgb"][0], out["depth"][0], out["alpha"][0], out["features"][0]
         target = data.rgb[t]
         loss = photometric_loss(rgb, target, cfg.w_ssim)
-        loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha)
+        loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha, cfg.depth_trim)
         onehot_t = data.onehot(t)
         loss = loss + cfg.w_mask * mask_loss(soft, onehot_t, data.mask_valid[t])
         if cfg.w_mask_iou > 0:
@@ -228,7 +232,7 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
                 pc = world @ cam[:3, :3].T + cam[:3, 3]
                 K = data.Ks[t]
                 uv = torch.stack([K[0, 0] * pc[:, 0] / pc[:, 2] + K[0, 2], K[1, 1] * pc[:, 1] / pc[:, 2] + K[1, 2]], -1)
-                loss = loss + cfg.w_track * track_loss(uv, tuv[:, t], tvis[:, t], float(data.W))
+                loss = loss + cfg.w_track * track_loss(uv, tuv[:, t], tvis[:, t], float(data.W), cfg.track_delta)
             node_pos = model.points_at(node_c0, torch.arange(len(node_c0))[:, None],
                                        torch.ones(len(node_c0), 1), t)
             loss = loss + cfg.w_arap * arap_loss(node_pos, node_c0, pairs) / max(scene_depth ** 2, 1e-9)

@@ -22,7 +22,8 @@ import numpy as np
 
 from ..scene import GeneratedClip
 from ..scene.rotations import normal_quats
-from .lifting import PointSet, backproject, instance_motion, interior_mask, static_residual, voxel_downsample
+from .lifting import (PointSet, backproject, instance_motion, instance_tracks, interior_mask, static_residual,
+                      track_noise, voxel_downsample)
 from .model import DynamicGaussians
 
 __all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
@@ -37,8 +38,12 @@ class InitConfig:
         motion_threshold: an instance is dynamic if it moves more than this fraction of the
             median scene depth over the clip ...
         static_pixels: ... and "it does not move" misplaces its tracks by more than this many
-            pixels in some frame (`static_residual`; with a moving camera, a depth prior a few
-            percent off makes static things seem to move in 3D, not in the image).
+            pixels over most frames (`static_residual`, a robust percentile over all frames; with
+            a moving camera, a depth prior a few percent off makes static things seem to move in
+            3D, not in the image) ...
+        noise_factor: ... and by more than this many times the tracks' own noise level
+            (`track_noise`, from their jitter), so 1-2 px of track noise never makes a static
+            road "dynamic".
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -49,6 +54,7 @@ class InitConfig:
     frame_stride: int = 6
     motion_threshold: float = 0.01
     static_pixels: float = 2.0
+    noise_factor: float = 4.0
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -98,6 +104,15 @@ def _covered(clip: GeneratedClip, frame: int, points: np.ndarray, tolerance: flo
     return out
 
 
+def _is_setting(label: str) -> bool:
+    """True for the label of a setting ("road", "table", "grass"...): the ground never moves,
+    whatever estimated tracks on it seem to say (drift, a moving camera's parallax)."""
+    from ..language.vocabulary import noun_to_category, word_to_setting
+
+    text = label.lower()
+    return bool(word_to_setting(text)) and not noun_to_category(text)
+
+
 def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
     """The static instance that pixels with a depth but no instance are lifted into (the
     setting, e.g. particles in the water), or None to leave them out: the static instance named
@@ -137,8 +152,11 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
         pts = backproject(clip, ref, select=sel)
         centre = pts.points.mean(0) if len(pts) else np.zeros(3)
         travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
-        dynamic[inst] = bool(travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
-                             and static_residual(clip, inst, ref) > cfg.static_pixels)
+        limit = max(cfg.static_pixels, cfg.noise_factor * track_noise(clip, instance_tracks(clip, inst))) \
+            if clip.tracks is not None else cfg.static_pixels
+        dynamic[inst] = bool(not _is_setting(clip.labels.get(inst, ""))
+                             and travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
+                             and static_residual(clip, inst, ref) > limit)
         reference[inst] = ref
         poses[inst] = (rots, trans)
 

@@ -148,14 +148,30 @@ def instance_tracks(clip: GeneratedClip, instance: int) -> np.ndarray:
     return np.flatnonzero(own)
 
 
+def track_noise(clip: GeneratedClip, idx: np.ndarray) -> float:
+    """Robust per-coordinate noise level (pixels) of the given tracks: the MAD of their second
+    differences over consecutive visible frames, / sqrt(6) (white noise of std s has second
+    differences of std s sqrt(6); smooth motion has almost none). 0 without enough data."""
+    if clip.tracks is None or len(idx) == 0 or clip.num_frames < 3:
+        return 0.0
+    tr, vis = clip.tracks[idx].astype(np.float64), clip.track_visible[idx]
+    d2 = tr[:, :-2] - 2 * tr[:, 1:-1] + tr[:, 2:]
+    ok = vis[:, :-2] & vis[:, 1:-1] & vis[:, 2:]
+    vals = np.abs(d2[ok]).ravel()
+    if vals.size < 8:
+        return 0.0
+    return float(1.4826 * np.median(vals) / np.sqrt(6.0))
+
+
 def static_residual(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
-                    scales: np.ndarray = np.linspace(0.85, 1.15, 31)) -> float:
+                    scales: np.ndarray = np.linspace(0.85, 1.15, 31), percentile: float = 75.0) -> float:
     """How badly "this instance does not move" explains its tracks, in pixels: the instance's
     tracks are lifted by depth in the reference frame and projected into every other frame with
-    that frame's camera; the result is the largest per-frame median distance to the tracked
-    positions, minimised over one global depth scale (a depth prior off by a few percent makes
-    a static object seem to slide as the camera moves; with a fixed camera the scale does not
-    matter). 0 when too few tracks are seen."""
+    that frame's camera; each frame scores the median distance to the tracked positions, and the
+    result is the `percentile` of those scores over all frames (robust to a few bad frames, where
+    the largest score is not), minimised over one global depth scale (a depth prior off by a few
+    percent makes a static object seem to slide as the camera moves; with a fixed camera the scale
+    does not matter). 0 when too few tracks are seen."""
     if clip.tracks is None:
         return 0.0
     idx = instance_tracks(clip, instance)
@@ -167,18 +183,17 @@ def static_residual(clip: GeneratedClip, instance: int, reference: int, min_trac
     rays = src - cam_ref.position
     best = np.inf
     for s in scales:
-        worst = 0.0
+        per_frame = []
         pts = cam_ref.position + s * rays
         for t in range(clip.num_frames):
             use = clip.track_visible[idx, t] & ok
             if t == reference or use.sum() < min_tracks:
                 continue
             uv, _ = clip.cameras[t].project(pts[use])
-            worst = max(worst, float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
-            if worst >= best:
-                break
-        best = min(best, worst)
-    return float(best)
+            per_frame.append(float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
+        if per_frame:
+            best = min(best, float(np.percentile(per_frame, percentile)))
+    return 0.0 if not np.isfinite(best) else float(best)
 
 
 def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,

@@ -45,12 +45,18 @@ def photometric_loss(pred: torch.Tensor, target: torch.Tensor, ssim_weight: floa
     return (1 - ssim_weight) * (pred - target).abs().mean() + ssim_weight * ssim_loss(pred, target)
 
 
-def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor) -> torch.Tensor:
-    """Relative L1 depth error where the prior has a depth and the render is mostly opaque."""
+def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor, trim: float = 0.0) -> torch.Tensor:
+    """Relative L1 depth error where the prior has a depth and the render is mostly opaque; with
+    `trim` > 0 the largest `trim` fraction of the errors is left out (a trimmed mean: an imperfect
+    prior's outliers, such as a wrong object depth or a mask a pixel off, do not pull the fit)."""
     valid = (target > 0) & (alpha.detach() > 0.5)
     if not valid.any():
         return pred.sum() * 0.0
-    return ((pred[valid] - target[valid]).abs() / target[valid]).mean()
+    err = (pred[valid] - target[valid]).abs() / target[valid]
+    if trim > 0 and err.numel() > 10:
+        keep = max(1, int(round(err.numel() * (1.0 - trim))))
+        err = torch.topk(err, keep, largest=False, sorted=False).values
+    return err.mean()
 
 
 def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
@@ -88,11 +94,18 @@ def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:
     return alpha[empty].mean()
 
 
-def track_loss(pred_uv: torch.Tensor, target_uv: torch.Tensor, visible: torch.Tensor, size: float) -> torch.Tensor:
-    """Mean L1 distance (in units of the image size) of projected track points to their 2D tracks."""
+def track_loss(pred_uv: torch.Tensor, target_uv: torch.Tensor, visible: torch.Tensor, size: float,
+               delta: float = 0.0) -> torch.Tensor:
+    """Mean distance (in units of the image size) of projected track points to their 2D tracks:
+    L1 per coordinate, or with `delta` > 0 (pixels) Huber (quadratic below `delta`, so a
+    track's pixel-level jitter is averaged rather than followed; linear above it, so a lost
+    track pulls no harder than under L1)."""
     if not visible.any():
         return pred_uv.sum() * 0.0
-    return ((pred_uv[visible] - target_uv[visible]).abs().sum(-1) / size).mean()
+    r = (pred_uv[visible] - target_uv[visible]).abs()
+    if delta > 0:
+        r = torch.where(r < delta, 0.5 * r * r / delta, r - 0.5 * delta)
+    return (r.sum(-1) / size).mean()
 
 
 def arap_loss(node_pos_t: torch.Tensor, node_pos_0: torch.Tensor, pairs: torch.Tensor) -> torch.Tensor:

@@ -7,7 +7,11 @@ Steps (MoSca / Feature 4X style, sized for a 2-core CPU):
        depth, masks, tracks, ARAP and smooth-motion terms, densify and prune (`fit.py`);
     3. complete what the monocular view never saw (`completion.py`);
     4. distil the feature field with the geometry frozen (`features.py`).
-Only the clip's frames, cameras and priors are used, never `clip.ground_truth`. Results are
+Priors come from `config.priors` (`morphosim_gym.priors.prepare_priors`): by default ("auto")
+the ones the clip carries, with the missing ones estimated from the frames (a clip of frames
+and cameras alone is reconstructed, never refused); "estimated" estimates all three;
+"ground_truth" takes the clip's own as they are. Only the clip's frames, cameras and priors
+are used, never `clip.ground_truth`. Results are
 cached on disk by the content hash of the clip and the configuration (atomic writes), so a
 second call with the same clip and settings loads the scene instead of fitting again.
 """
@@ -24,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..priors import PRIOR_SOURCES, prepare_priors
 from ..scene import GeneratedClip, Provenance, Scene4D, SceneObject, load_scene, save_scene
 from ..scene.diskcache import load_or_build
 from .features import FeatureConfig, distill_features
@@ -33,7 +38,7 @@ from .lifting import estimate_background_color
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 7      # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 8      # bumped when the method changes, so older results are fitted again
 
 
 @dataclass(frozen=True)
@@ -42,6 +47,8 @@ class ReconstructionConfig:
 
     Attributes:
         init, fit, features: the settings of each stage.
+        priors: where depth, masks and tracks come from: "auto" (the clip's, missing ones
+            estimated), "estimated" (all from the frames) or "ground_truth" (the clip's as is).
         complete: add Gaussians for what the input view never saw (ground beyond the view,
             the far side of objects).
         complete_iterations: fit iterations after completion (blend the added ground in).
@@ -54,6 +61,7 @@ class ReconstructionConfig:
     init: InitConfig = field(default_factory=InitConfig)
     fit: FitConfig = field(default_factory=FitConfig)
     features: FeatureConfig = field(default_factory=FeatureConfig)
+    priors: str = "auto"
     complete: bool = True
     complete_iterations: int = 200
     seed: int = 0
@@ -61,15 +69,19 @@ class ReconstructionConfig:
     cache_dir: str | None = None
     progress: bool = True
 
+    def __post_init__(self) -> None:
+        if self.priors not in PRIOR_SOURCES:
+            raise ValueError(f"Expected priors in {PRIOR_SOURCES}, found {self.priors!r}")
+
 
 def validate_clip(clip: Any) -> None:
     """Raise `ValueError` naming the problem if a clip cannot be reconstructed (before any work)."""
     if not isinstance(clip, GeneratedClip):
         raise ValueError(f"Expected a GeneratedClip, found {type(clip).__name__}")
-    missing = [n for n in ("depth", "masks", "tracks") if getattr(clip, n) is None]
+    missing = [n for n in ("depth", "masks") if getattr(clip, n) is None]
     if missing:
-        raise ValueError(f"Expected a clip with depth, instance-mask and track priors for reconstruction, "
-                         f"missing {missing} (add them with a prior estimator)")
+        raise ValueError(f"Expected a clip with depth and instance-mask priors for reconstruction, "
+                         f"missing {missing} (the prior estimator returned none)")
     if not np.any(clip.depth > 0):
         raise ValueError("Expected a depth prior with some positive depths, found none")
     if not np.any(clip.masks >= 0):
@@ -113,9 +125,10 @@ def _objects(clip: GeneratedClip, ids: list[int]) -> list[SceneObject]:
 
 def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None) -> Scene4D:
     """Fit a `Scene4D` to a clip (see the module docstring). `ValueError` before any work if the
-    clip lacks what the method needs."""
+    clip (or its estimated priors) cannot be reconstructed."""
     cfg = config or ReconstructionConfig()
-    validate_clip(clip)
+    if not isinstance(clip, GeneratedClip):
+        raise ValueError(f"Expected a GeneratedClip, found {type(clip).__name__}")
     if cfg.cache:
         return load_or_build(cache_path(clip, cfg), load_scene, lambda: _fit_scene(clip, cfg), save_scene)
     return _fit_scene(clip, cfg)
@@ -123,6 +136,9 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
 
 def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
     start = time.perf_counter()
+    source = clip
+    clip = prepare_priors(source, cfg.priors)
+    validate_clip(clip)
     fit_cfg = cfg.fit if cfg.progress else _no_progress(cfg.fit)
     feat_cfg = cfg.features if cfg.progress else _no_progress(cfg.features)
     init = initialize(clip, cfg.init, seed=cfg.seed)
@@ -153,9 +169,10 @@ def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
                                                                                  for c in clip.cameras}) > 1 else
                     (clip.cameras[0],), decoders=decoders,
                     provenance=Provenance(clip.prompt or None, clip.info.get("seed"), clip.info.get("backend", "clip"),
-                                          f"fit:{cache_key(clip, cfg)}"),
+                                          f"fit:{cache_key(source, cfg)}"),
                     background=background)
-    scene._fit_log = {"fit": fit_log, "features": feat_log, "seconds": seconds}  # for reports (not saved)
+    scene._fit_log = {"fit": fit_log, "features": feat_log, "seconds": seconds,  # for reports (not saved)
+                      "priors": clip.info["priors"]}
     return scene
 
 

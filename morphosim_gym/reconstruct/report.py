@@ -46,6 +46,9 @@ def quality_report(clip: GeneratedClip, scene: Scene4D, frame_stride: int = 4, s
     """Measure a reconstruction (see the module docstring); novel views need `clip.ground_truth`."""
     frames = list(range(0, clip.num_frames, max(1, frame_stride)))
     in_psnr, in_ssim, ious = [], [], {}
+    by_name: dict[str, list[int]] = {}
+    for o in scene.objects:
+        by_name.setdefault(o.name, []).append(o.id)
     for i in frames:
         out = render(scene, clip.cameras[i], t=i / clip.fps)
         in_psnr.append(psnr(out.rgb, clip.frames[i]))
@@ -54,7 +57,8 @@ def quality_report(clip: GeneratedClip, scene: Scene4D, frame_stride: int = 4, s
             gt = clip.masks[i] == inst
             if gt.sum() < 4:
                 continue
-            ious.setdefault(name, []).append(iou(out.instance == inst, gt))
+            # by name: a scene fitted to estimated priors numbers its instances its own way
+            ious.setdefault(name, []).append(iou(np.isin(out.instance, by_name.get(name, [])), gt))
     report: dict = {
         "input": {"psnr": float(np.mean(in_psnr)), "ssim": float(np.mean(in_ssim)), "frames": len(frames)},
         "instance_iou": {k: float(np.mean(v)) for k, v in ious.items()},

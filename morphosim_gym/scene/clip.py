@@ -30,7 +30,9 @@ class GeneratedClip:
         track_visible: optional [P, T] bool visibility of each track.
         prompt: the text the clip was generated from.
         ground_truth: the generator's own Scene4D (evaluation only; reconstruction never reads it).
-        info: free-form JSON-friendly extras (backend, seed, trajectory boxes...).
+        info: free-form JSON-friendly extras (backend, seed, trajectory boxes...); a clip prepared
+            for reconstruction (`morphosim_gym.priors.prepare_priors`) has info["priors"]: each
+            prior's origin ("estimated", "ground_truth", "corrupted" or what the clip carried).
     """
 
     frames: np.ndarray
@@ -86,6 +88,8 @@ class GeneratedClip:
             vis = np.ones(tr.shape[:2], bool) if self.track_visible is None else np.asarray(self.track_visible, bool)
             if vis.shape != tr.shape[:2]:
                 raise ValueError(f"Expected track_visible of shape {tr.shape[:2]}, found {vis.shape}")
+            if not np.all(np.isfinite(tr[vis])):
+                raise ValueError("Expected finite tracks where visible, found NaN or infinite positions")
             self.track_visible = vis
         if self.ground_truth is not None and not isinstance(self.ground_truth, Scene4D):
             raise ValueError(f"Expected ground_truth as a Scene4D, found {type(self.ground_truth).__name__}")

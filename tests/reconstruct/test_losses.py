@@ -40,3 +40,14 @@ def test_gradients_reach_the_rendered_maps():
     soft = (t * 0.8 + 0.1).requires_grad_(True)
     mask_iou_loss(soft, t).backward()
     assert soft.grad is not None and soft.grad.abs().sum() > 0
+
+
+def test_covering_more_than_the_object_costs():
+    # the union term: a map that also covers pixels outside the object is charged for them
+    t = _maps()
+    over = t.clone()
+    over[..., 1] = 1.0                                   # the small object's map covers the whole frame
+    loss = mask_iou_loss(over, t).item()
+    # object: IoU 16 / 1024; ground: untouched, IoU 1
+    expected = (1 - 16 / 1024) / 2
+    assert abs(loss - expected) < 1e-4 and loss > 0.45

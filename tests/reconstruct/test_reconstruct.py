@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import morphosim_gym as ms
+from morphosim_gym.edit.select import MaskAgreementScorer
 from morphosim_gym.reconstruct import ReconstructionConfig, quality_report, reconstruct
 from morphosim_gym.reconstruct.features import FeatureConfig
 from morphosim_gym.reconstruct.fit import FitConfig
@@ -65,6 +66,30 @@ def test_edits_select_through_the_feature_field(scene):
     assert yellow.undo() is scene
 
 
+def test_selection_is_judged_by_evidence_not_by_the_gaussians_ids(scene):
+    from morphosim_gym.edit.select import Selector
+
+    bus = scene.object("bus").id
+    truth = scene.gaussians.object_ids == bus
+    sel = Selector().select(scene, [bus], "bus")
+    # the 2D evidence tells the thresholds apart (they do not all score the same)
+    assert sel.method == "feature_field"
+    assert max(s for _, s in sel.scores) - min(s for _, s in sel.scores) > 1e-3
+    # the same features with the Gaussians' ids swapped: selection by ids would now pick the road
+    others = [o.id for o in scene.objects if o.id != bus]
+    ids = scene.gaussians.object_ids.copy()
+    ids[truth], ids[np.isin(scene.gaussians.object_ids, others)] = others[0], bus
+    swapped = scene.derive(gaussians=scene.gaussians.replace(object_ids=ids))
+    sel2 = Selector().select(swapped, [bus], "bus")
+    precision = (sel2.mask & truth).sum() / max(sel2.mask.sum(), 1)
+    recall = (sel2.mask & truth).sum() / truth.sum()
+    assert precision >= 0.9 and recall >= 0.9
+    # the best-scoring candidate is kept: a scorer that prefers the worst picks a worse selection
+    worst = Selector(scorer=lambda soft, target: -MaskAgreementScorer()(soft, target)).select(scene, [bus], "bus")
+    iou = lambda m: (m & truth).sum() / max((m | truth).sum(), 1)  # noqa: E731
+    assert iou(sel.mask) > iou(worst.mask) + 0.05
+
+
 def test_deterministic_and_cached(clip, tmp_path):
     cfg = replace(FAST, fit=replace(FAST.fit, iterations=30), features=replace(FAST.features, iterations=10),
                   cache=True, cache_dir=str(tmp_path))
@@ -82,8 +107,16 @@ def test_deterministic_and_cached(clip, tmp_path):
 def test_bad_clips_fail_before_any_work(clip):
     no_depth = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, masks=clip.masks,
                                 labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
-    with pytest.raises(ValueError, match="depth"):
-        reconstruct(no_depth, FAST)
+    # a missing prior is estimated from the frames (and the clip's info says so), never refused
+    from morphosim_gym.priors import prepare_priors
+
+    filled = prepare_priors(no_depth)
+    assert filled.depth is not None and filled.depth.shape == clip.depth.shape and np.any(filled.depth > 0)
+    assert filled.info["priors"] == {"depth": "estimated", "masks": "clip", "tracks": "clip"}
+    with pytest.raises(ValueError, match="priors"):
+        replace(FAST, priors="oracle")
+    with pytest.raises(ValueError, match=r"missing \['depth'\]"):
+        prepare_priors(no_depth, "ground_truth")
     zero = ms.GeneratedClip(frames=clip.frames, cameras=clip.cameras, fps=clip.fps, depth=np.zeros_like(clip.depth),
                             masks=clip.masks, labels=clip.labels, tracks=clip.tracks, track_visible=clip.track_visible)
     with pytest.raises(ValueError, match="positive depth"):

@@ -1,4 +1,8 @@
-"""Pluggable prior estimators for diffusion clips: depth, instance masks, point tracks.
+"""The diffusion backend's attention-guided prior estimator (depth, instance masks, point tracks).
+
+The `PriorEstimators` protocol, `ground_plane_depth` and `flow_tracks` live in
+`morphosim_gym.priors` (shared by every clip source and by reconstruction) and are re-exported
+here. `morphosim_gym.priors.RGBPriorEstimators` estimates from the pixels alone.
 
 A diffusion model gives only RGB frames; reconstruction also wants priors. Anything with the
 three methods of `PriorEstimators` can supply them (a learned monocular depth model, a video
@@ -23,90 +27,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
 
 import cv2
 import numpy as np
 
+from ...priors import PriorEstimators, flow_tracks, ground_plane_depth
 from ...scene.camera import Camera
 from .targets import GuidanceTarget, latent_frame_groups
 
-__all__ = ["PriorEstimators", "DefaultPriorEstimators", "ground_plane_depth", "flow_tracks"]
-
-
-@runtime_checkable
-class PriorEstimators(Protocol):
-    """What the diffusion backend asks for each generated clip; return None to skip a prior."""
-
-    def depth(self, frames: np.ndarray, camera: Camera) -> np.ndarray | None:
-        """frames [T, H, W, 3] uint8 -> [T, H, W] float32 camera-z depth (0 where unknown)."""
-
-    def masks(self, frames: np.ndarray, attention: np.ndarray | None,
-              targets: Sequence[GuidanceTarget]) -> tuple[np.ndarray, dict[int, str]] | None:
-        """frames [T, H, W, 3], attention [N_targets, T_lat, H_lat, W_lat] (or None) ->
-        ([T, H, W] int32 instance ids, -1 background; {id: label})."""
-
-    def tracks(self, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """frames [T, H, W, 3] -> (tracks [P, T, 2] float32 pixel x, y; visible [P, T] bool)."""
-
-
-def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: float = 50.0) -> np.ndarray:
-    """[H, W] float32 camera-z depth of the world plane z = ground_height seen by `camera`
-    (0 where the pixel ray misses the plane, hits it behind the camera or beyond `max_depth`)."""
-    jj, ii = np.moveaxis(camera.pixel_centres(), -1, 0)
-    dirs_cam = np.stack([(jj - camera.cx) / camera.fx, (ii - camera.cy) / camera.fy, np.ones_like(jj)], -1)
-    c2w = camera.camera_to_world
-    dirs = dirs_cam @ c2w[:3, :3].T  # world direction per unit camera depth
-    origin_z = c2w[2, 3]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = (ground_height - origin_z) / dirs[..., 2]  # camera depth at which the ray meets the plane
-    ok = np.isfinite(z) & (z > camera.near) & (z <= max_depth)
-    return np.where(ok, z, 0.0).astype(np.float32)
-
-
-def _sample(field: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Bilinear lookup of an [H, W, 2] field at float pixel positions [P, 2] (x, y; centres at +0.5)."""
-    m = pts.astype(np.float32)[None] - 0.5  # cv2.remap uses integer-centred coordinates
-    return cv2.remap(field, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[0]
-
-
-def flow_tracks(frames: np.ndarray, spacing: int = 8, fb_threshold: float = 1.0,
-                preset: int = cv2.DISOPTICAL_FLOW_PRESET_MEDIUM) -> tuple[np.ndarray, np.ndarray]:
-    """Point tracks from chained DIS optical flow with a forward-backward check.
-
-    Args:
-        frames: [T, H, W, 3] uint8.
-        spacing: grid spacing in pixels of the points seeded on frame 0.
-        fb_threshold: maximum forward-backward round-trip error in pixels.
-
-    Returns:
-        tracks [P, T, 2] float32 pixel (x, y) (centre of pixel (i, j) at (j + 0.5, i + 0.5));
-        visible [P, T] bool.
-    """
-    f = np.asarray(frames)
-    t, h, w = f.shape[:3]
-    s = max(1, int(spacing))
-    ys, xs = np.meshgrid(np.arange(s / 2, h, s), np.arange(s / 2, w, s), indexing="ij")
-    pts = np.stack([xs.ravel(), ys.ravel()], -1).astype(np.float32)
-    tracks = np.zeros((len(pts), t, 2), np.float32)
-    vis = np.zeros((len(pts), t), bool)
-    tracks[:, 0], vis[:, 0] = pts, True
-    if t == 1:
-        return tracks, vis
-    dis = cv2.DISOpticalFlow_create(preset)
-    gray = [cv2.cvtColor(np.ascontiguousarray(fr), cv2.COLOR_RGB2GRAY) for fr in f]
-    alive = np.ones(len(pts), bool)
-    cur = pts.copy()
-    for k in range(t - 1):
-        fwd = dis.calc(gray[k], gray[k + 1], None)
-        bwd = dis.calc(gray[k + 1], gray[k], None)
-        nxt = cur + _sample(fwd, cur)
-        back = nxt + _sample(bwd, nxt)
-        inside = (nxt[:, 0] >= 0) & (nxt[:, 0] <= w) & (nxt[:, 1] >= 0) & (nxt[:, 1] <= h)
-        alive &= inside & (np.linalg.norm(back - cur, axis=1) <= fb_threshold)
-        cur = np.where(alive[:, None], nxt, cur)
-        tracks[:, k + 1], vis[:, k + 1] = cur, alive
-    return tracks, vis
+__all__ = ["DefaultPriorEstimators", "PriorEstimators", "flow_tracks", "ground_plane_depth"]
 
 
 @dataclass
@@ -129,12 +58,12 @@ class DefaultPriorEstimators:
     track_spacing: int = 8
     fb_threshold: float = 1.0
 
-    def depth(self, frames: np.ndarray, camera: Camera) -> np.ndarray:
+    def depth(self, frames: np.ndarray, camera: Camera, masks: np.ndarray | None = None) -> np.ndarray:
         d = ground_plane_depth(camera, self.ground_height, self.max_depth)
         return np.broadcast_to(d, (len(frames),) + d.shape).copy()
 
-    def masks(self, frames: np.ndarray, attention: np.ndarray | None,
-              targets: Sequence[GuidanceTarget]) -> tuple[np.ndarray, dict[int, str]]:
+    def masks(self, frames: np.ndarray, attention: np.ndarray | None, targets: Sequence[GuidanceTarget],
+              cameras: Sequence[Camera] | None = None) -> tuple[np.ndarray, dict[int, str]]:
         t, h, w = np.asarray(frames).shape[:3]
         out = np.full((t, h, w), -1, np.int32)
         best = np.zeros((t, h, w), np.float32)

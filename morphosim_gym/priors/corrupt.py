@@ -1,0 +1,57 @@
+"""Realistic errors on a clip's priors, to measure how a fit copes with imperfect ones."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from ..scene import GeneratedClip
+
+__all__ = ["corrupt_priors"]
+
+
+def _smooth_field(rng: np.random.Generator, shape: tuple[int, int], amplitude: float) -> np.ndarray:
+    """[H, W] smooth random field in [-amplitude, amplitude] (a 4x4 grid upsampled bicubically)."""
+    coarse = rng.uniform(-1.0, 1.0, (4, 4)).astype(np.float32)
+    f = cv2.resize(coarse, (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
+    return amplitude * f / max(float(np.abs(f).max()), 1e-6)
+
+
+def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10, depth_noise: float = 0.01,
+                   mask_pixels: int = 2, mask_drop: float = 0.05, track_noise: float = 1.0,
+                   track_drop: float = 0.10) -> GeneratedClip:
+    """A copy of a clip carrying all three priors with realistic errors: depth times a smooth
+    +-`depth_field` field and `depth_noise` relative noise; each frame's masks eroded or dilated
+    by 1..`mask_pixels` px, `mask_drop` of the frames' masks dropped (all background); tracks plus
+    `track_noise` px Gaussian noise with `track_drop` of the observations invisible.
+    `info["priors"]` says "corrupted"."""
+    missing = [n for n in ("depth", "masks", "tracks") if getattr(clip, n) is None]
+    if missing:
+        raise ValueError(f"Expected a clip carrying depth, masks and tracks to corrupt, missing {missing}")
+    rng = np.random.default_rng([int(seed), 11])
+    t, h, w = clip.depth.shape
+    depth = clip.depth * (1.0 + _smooth_field(rng, (h, w), depth_field))[None]
+    depth = depth * (1.0 + depth_noise * rng.standard_normal(depth.shape))
+    depth = np.where(clip.depth > 0, depth, 0.0).astype(np.float32)
+    masks = clip.masks.copy()
+    k = np.ones((3, 3), np.uint8)
+    for i in range(t):
+        if rng.random() < mask_drop:
+            masks[i] = -1
+            continue
+        n = int(rng.integers(1, mask_pixels + 1))
+        grow = rng.random() < 0.5
+        out = np.full((h, w), -1, np.int32)
+        for inst in np.unique(masks[i]):
+            if inst < 0:
+                continue
+            m = (masks[i] == inst).astype(np.uint8)
+            m = (cv2.dilate(m, k, iterations=n) if grow else cv2.erode(m, k, iterations=n)).astype(bool)
+            out[m & ((out < 0) | (masks[i] == inst))] = inst
+        masks[i] = out
+    tracks = (clip.tracks + track_noise * rng.standard_normal(clip.tracks.shape)).astype(np.float32)
+    visible = clip.track_visible & (rng.random(clip.track_visible.shape) >= track_drop)
+    info = {**clip.info, "priors": {"depth": "corrupted", "masks": "corrupted", "tracks": "corrupted"}}
+    return replace(clip, depth=depth, masks=masks, tracks=tracks, track_visible=visible, info=info)

@@ -1,0 +1,41 @@
+"""Depth from the camera and the ground plane: the ground itself, and objects standing on it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene.camera import Camera
+
+__all__ = ["contact_depth", "ground_plane_depth"]
+
+
+def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: float = 50.0) -> np.ndarray:
+    """[H, W] float32 camera-z depth of the world plane z = ground_height seen by `camera`
+    (0 where the pixel ray misses the plane, hits it behind the camera or beyond `max_depth`)."""
+    jj, ii = np.moveaxis(camera.pixel_centres(), -1, 0)
+    dirs_cam = np.stack([(jj - camera.cx) / camera.fx, (ii - camera.cy) / camera.fy, np.ones_like(jj)], -1)
+    c2w = camera.camera_to_world
+    dirs = dirs_cam @ c2w[:3, :3].T  # world direction per unit camera depth
+    origin_z = c2w[2, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = (ground_height - origin_z) / dirs[..., 2]  # camera depth at which the ray meets the plane
+    ok = np.isfinite(z) & (z > camera.near) & (z <= max_depth)
+    return np.where(ok, z, 0.0).astype(np.float32)
+
+
+def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float) -> float:
+    """Camera depth of an object from where its mask [H, W] meets the ground: the ground depth
+    [H, W] under the mask's lowest pixels (the median over its bottom row's columns, taken one
+    pixel below the mask). `fallback` when the mask touches no ground (a fish in the water,
+    a bird in the sky) or is empty."""
+    rows, cols = np.nonzero(mask)
+    if len(rows) == 0:
+        return float(fallback)
+    h = mask.shape[0]
+    bottom = {}
+    for r, c in zip(rows, cols):
+        if r > bottom.get(c, -1):
+            bottom[c] = r
+    z = [ground[min(r + 1, h - 1), c] for c, r in bottom.items()]
+    z = [v for v in z if v > 0]
+    return float(np.median(z)) if z else float(fallback)

@@ -1,0 +1,67 @@
+"""`prepare_priors`: the clip reconstruction reads, with each prior from the chosen source."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from ..scene import GeneratedClip
+from .masks import plan_targets
+from .protocol import PriorEstimators
+from .rgb import RGBPriorEstimators
+
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors"]
+
+PRIOR_NAMES = ("depth", "masks", "tracks")
+PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
+
+
+def _carried(clip: GeneratedClip) -> str:
+    """What the priors a clip carries are: the generator's renders of its ground truth, or an estimate."""
+    return "ground_truth" if clip.ground_truth is not None else str(clip.info.get("priors") or "clip")
+
+
+def _setting_label(clip: GeneratedClip) -> str:
+    s = clip.info.get("setting")
+    return str(s) if s else "ground"
+
+
+def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorEstimators | None = None) -> GeneratedClip:
+    """A copy of `clip` whose depth, masks and tracks come from `source`:
+
+    - "auto": the priors the clip carries; the missing ones estimated from the frames;
+    - "estimated": all three estimated from the frames (what the clip carries is ignored);
+    - "ground_truth": the clip's own priors as they are (a `ValueError` names the missing ones).
+
+    `info["priors"]` of the copy maps each prior to where it came from ("estimated", or what the
+    clip carried: "ground_truth" for the generator's renders). Masks are estimated before depth
+    (object depth comes from where the masks meet the ground)."""
+    if source not in PRIOR_SOURCES:
+        raise ValueError(f"Expected priors source in {PRIOR_SOURCES}, found {source!r}")
+    have = {n: getattr(clip, n) is not None for n in PRIOR_NAMES}
+    if source == "ground_truth":
+        missing = [n for n in PRIOR_NAMES if not have[n]]
+        if missing:
+            raise ValueError(f"Expected a clip carrying depth, masks and tracks for priors='ground_truth', "
+                             f"missing {missing}")
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
+    estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
+    if not any(estimate.values()):
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
+    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=_setting_label(clip))
+    fields: dict[str, Any] = {}
+    masks, labels = clip.masks, dict(clip.labels)
+    if estimate["masks"]:
+        targets = plan_targets(clip.info, clip.num_frames, clip.width, clip.height)
+        out = est.masks(clip.frames, None, targets, cameras=clip.cameras)
+        masks, labels = (None, {}) if out is None else out
+        fields.update(masks=masks, labels=labels)
+    if estimate["depth"]:
+        fields["depth"] = est.depth(clip.frames, clip.cameras, masks=masks)
+    if estimate["tracks"]:
+        out = est.tracks(clip.frames)
+        fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
+    origin = {n: ("estimated" if estimate[n] else _carried(clip)) for n in PRIOR_NAMES}
+    fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__}
+    return replace(clip, **fields)
+

@@ -1,0 +1,92 @@
+"""Priors from RGB alone: masks from motion labelled by the plan, ground-contact depth, flow tracks."""
+
+import numpy as np
+import pytest
+
+from morphosim_gym.priors import PlanTarget, PriorEstimators, RGBPriorEstimators, prepare_priors
+from morphosim_gym.scene import Camera, GeneratedClip
+
+
+def _camera(w=64, h=48):
+    # 2 m above the ground, looking along +y and tilted down
+    return Camera.look_at((0.0, -6.0, 2.0), (0.0, 0.0, 0.5), width=w, height=h, fov_y_deg=50.0)
+
+
+def _moving_square(t=9, w=64, h=48, still=False):
+    """A textured ground-coloured background and a red square sliding left to right on it."""
+    rng = np.random.default_rng(0)
+    bg = (rng.integers(90, 110, (h, w, 3))).astype(np.uint8)
+    frames, boxes = [], []
+    for i in range(t):
+        f = bg.copy()
+        x0 = 8 + (0 if still else 4 * i)
+        f[24:36, x0:x0 + 10] = (220, 30, 30)
+        frames.append(f)
+        boxes.append([x0 / w, 24 / h, (x0 + 10) / w, 36 / h])
+    return np.stack(frames), np.asarray(boxes)
+
+
+def test_moving_object_is_found_and_labelled_from_the_plan():
+    frames, boxes = _moving_square()
+    est = RGBPriorEstimators(setting_label="road")
+    assert isinstance(est, PriorEstimators)
+    masks, labels = est.masks(frames, None, [PlanTarget("bus", boxes)], cameras=[_camera()] * len(frames))
+    assert labels[0] == "road" and labels[1] == "bus"
+    truth = np.zeros(masks.shape, bool)
+    for i, b in enumerate(boxes):
+        x0 = round(b[0] * 64)
+        truth[i, 24:36, x0:x0 + 10] = True
+    pred = masks == 1
+    assert (pred & truth).sum() / (pred | truth).sum() > 0.8
+
+
+def test_nothing_moving_and_a_single_frame_give_only_the_setting():
+    frames, _ = _moving_square(still=True)
+    est = RGBPriorEstimators()
+    masks, labels = est.masks(frames, None, [], cameras=[_camera()] * len(frames))
+    assert set(np.unique(masks)) <= {-1, 0} and labels.get(0) == "ground"
+    one, _ = est.masks(frames[:1], None, [], cameras=[_camera()])
+    assert set(np.unique(one)) <= {-1, 0}
+
+
+def test_object_depth_comes_from_its_ground_contact():
+    frames, boxes = _moving_square()
+    cam = _camera()
+    est = RGBPriorEstimators()
+    masks, _ = est.masks(frames, None, [PlanTarget("bus", boxes)], cameras=[cam] * len(frames))
+    depth = est.depth(frames, cam, masks=masks)
+    ground = est.depth(frames, cam)
+    assert depth.shape == masks.shape and np.all(np.isfinite(depth))
+    sel = masks[4] == 1
+    rows = np.flatnonzero(sel.any(axis=1))
+    # constant over the object, equal to the ground just under its lowest row
+    z = depth[4][sel]
+    assert np.ptp(z) < 1e-5
+    assert abs(z[0] - np.median(ground[4][min(rows.max() + 1, 47)][sel.any(axis=0)])) < 0.05 * z[0]
+    with pytest.raises(ValueError, match="cameras"):
+        est.depth(frames, [cam] * 2)
+
+
+def test_a_clip_of_frames_and_cameras_gets_every_prior_estimated():
+    frames, boxes = _moving_square()
+    cam = _camera()
+    info = {"trajectories": {"bus": {"boxes": (boxes * [64, 48, 64, 48]).tolist()}}, "setting": "road"}
+    clip = GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, info=info)
+    out = prepare_priors(clip)
+    assert out.info["priors"] == {"depth": "estimated", "masks": "estimated", "tracks": "estimated"}
+    assert out.labels == {0: "road", 1: "bus"}
+    assert out.depth.shape == (9, 48, 64) and out.tracks.shape[1:] == (9, 2)
+    assert clip.depth is None                      # the caller's clip is left as it was
+    with pytest.raises(ValueError, match="priors source"):
+        prepare_priors(clip, "oracle")
+
+
+def test_bad_priors_name_the_field():
+    frames, _ = _moving_square()
+    cam = _camera()
+    tracks = np.zeros((4, len(frames), 2), np.float32)
+    tracks[0, 3] = np.nan
+    with pytest.raises(ValueError, match="finite tracks"):
+        GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, tracks=tracks)
+    with pytest.raises(ValueError, match="depth of shape"):
+        GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, depth=np.ones((2, 48, 64), np.float32))
