@@ -33,6 +33,7 @@ class SceneObject:
         color: RGB in [0, 1] the object was asked to have, if any.
         dynamic: whether the object moves.
         role: "object", "background" (ground, water, sky...) or "agent".
+        asset: the real asset its Gaussians came from ("source/id"), or None for a procedural one.
     """
 
     id: int
@@ -41,6 +42,7 @@ class SceneObject:
     color: tuple[float, float, float] | None = None
     dynamic: bool = False
     role: str = "object"
+    asset: str | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.id, bool) or not isinstance(self.id, (int, np.integer)) or self.id < 0:
@@ -57,8 +59,11 @@ class SceneObject:
             object.__setattr__(self, "color", c)
 
     def to_dict(self) -> dict:
-        """JSON-friendly form."""
-        return asdict(self)
+        """JSON-friendly form (`asset` only when set, so procedural scenes save as before)."""
+        d = asdict(self)
+        if d["asset"] is None:
+            del d["asset"]
+        return d
 
 
 @dataclass(frozen=True)
@@ -70,11 +75,16 @@ class Provenance:
     generator: str = "unknown"
     reconstruction: str = "none"
     edits: tuple[str, ...] = ()
+    substitutions: tuple[tuple[str, str, float | None], ...] = ()   # (asked noun, chosen, similarity)
 
     def to_dict(self) -> dict:
-        """JSON-friendly form."""
+        """JSON-friendly form (`substitutions` only when there are some)."""
         d = asdict(self)
         d["edits"] = list(self.edits)
+        if self.substitutions:
+            d["substitutions"] = [list(x) for x in self.substitutions]
+        else:
+            del d["substitutions"]
         return d
 
 
@@ -285,7 +295,7 @@ class Scene4D:
         if edit is not None:
             prov = values["provenance"]
             values["provenance"] = Provenance(prov.prompt, prov.seed, prov.generator, prov.reconstruction,
-                                              prov.edits + (edit,))
+                                              prov.edits + (edit,), prov.substitutions)
             values["parent"] = self
         return Scene4D(**values)
 
@@ -358,6 +368,7 @@ def provenance_from_dict(d: Mapping[str, Any]) -> Provenance:
     """Inverse of `Provenance.to_dict`."""
     d = dict(d)
     d["edits"] = tuple(d.get("edits", ()))
+    d["substitutions"] = tuple(tuple(x) for x in d.get("substitutions", ()))
     return Provenance(**d)
 
 
