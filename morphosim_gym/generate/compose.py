@@ -29,6 +29,7 @@ from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, SHAPE_SPECS, CategorySpec, build_parts
+from . import open_assets  # noqa: F401  (registers real assets as open-vocabulary candidates)
 from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, uses_assets
 from .color_match import match_mean_color, tint_keep_shading
 from .settings import Setting, build_setting, carve_under, setting_levels

@@ -37,7 +37,7 @@ _log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
 
 
-def _env_sources() -> tuple[str, ...] | None:
+def env_sources() -> tuple[str, ...] | None:
     raw = os.environ.get(ENV_SOURCES)
     return None if raw is None else tuple(n.strip() for n in raw.split(",") if n.strip())
 
@@ -49,7 +49,7 @@ def _index_for(sources: tuple[str, ...] | None) -> AssetIndex:
 
 def asset_index() -> AssetIndex:
     """The index of the system sources `$MORPHOSIM_ASSET_SOURCES` allows (cached per process)."""
-    return _index_for(_env_sources())
+    return _index_for(env_sources())
 
 
 @functools.lru_cache(maxsize=1)
@@ -64,7 +64,7 @@ def uses_assets(mode: str) -> bool:
         raise ValueError(f"Expected assets in {ASSET_MODES}, found {mode!r}")
     if mode == "off":
         return False
-    if _env_sources() == ():
+    if env_sources() == ():
         if mode == "require":
             raise AssetError(f"assets='require' but ${ENV_SOURCES} is empty (no source allowed)")
         return False
@@ -96,7 +96,7 @@ def asset_candidates(category: str) -> tuple[AssetRecord, ...]:
         aid = category[len(ASSET_PREFIX):]
         index = asset_index()
         return (index.get(aid),) if aid in index else ()
-    return _candidates(category, _env_sources())
+    return _candidates(category, env_sources())
 
 
 def pick_asset(category: str, seed: int, k: int) -> AssetRecord | None:
