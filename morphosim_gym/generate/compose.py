@@ -27,10 +27,11 @@ from ..limits import check_clip_size
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
+from ..scene.sky import check_sky
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from .assets import CATEGORY_SPECS, SHAPE_SPECS, CategorySpec, build_parts
 from . import open_assets  # noqa: F401  (registers real assets as open-vocabulary candidates)
-from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, uses_assets
+from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, setting_sky, uses_assets
 from .color_match import match_mean_color, tint_keep_shading
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
@@ -308,6 +309,9 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         trajectories[inst.name] = traj
     # ---- assemble Gaussians, objects and the motion scaffold
     scene = _assemble(plan, instances, setting, cameras, config, seed, prompt)
+    sky = setting_sky(setting_name, seed) if real else None
+    if sky is not None:
+        scene.sky = check_sky(sky)    # set before anything reads (or hashes) the scene
     return ComposedScene(scene, trajectories, setting, cameras)
 
 

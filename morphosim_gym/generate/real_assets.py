@@ -26,7 +26,7 @@ import numpy as np
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
 from ..scene.parts import SurfaceCloud
 
-__all__ = ["ASSET_MODES", "ASSET_PREFIX", "asset_candidates", "asset_cloud", "asset_index", "pick_asset",
+__all__ = ["ASSET_MODES", "ASSET_PREFIX", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
            "uses_assets"]
 
 ASSET_MODES = ("auto", "off", "require")
@@ -117,3 +117,41 @@ def asset_cloud(record: AssetRecord, budget: int, longest_m: float | None, seed:
                         opacities=np.asarray(g.opacities, dtype=np.float64),
                         colors=np.asarray(g.colors, dtype=np.float64), nodes=np.zeros(n, dtype=np.int64),
                         node_names=["body"])
+
+
+# outdoor settings -> the sky panoramas they may get (Blender's studio lights, by stem)
+SETTING_SKIES: dict[str, tuple[str, ...]] = {
+    "ground": ("courtyard", "city", "forest", "sunrise", "sunset"),
+    "grass": ("forest", "courtyard", "sunrise", "sunset"),
+    "road": ("city", "courtyard", "sunset"),
+    "snow": ("sunrise", "courtyard"),
+    "sand": ("sunset", "sunrise"),
+    "water": ("sunset", "sunrise", "courtyard"),
+    "sky": ("sunrise", "sunset", "courtyard"),
+}
+SKY_SIZE = (128, 256)   # rows, columns of the stored equirectangular sky
+
+
+@functools.lru_cache(maxsize=16)
+def _sky_image(path: str) -> np.ndarray:
+    import cv2
+
+    from ..assets import load_sky
+    img = load_sky(path).image
+    return cv2.resize(img, (SKY_SIZE[1], SKY_SIZE[0]), interpolation=cv2.INTER_AREA).clip(0, 1).astype(np.float32)
+
+
+def setting_sky(setting: str, seed: int) -> np.ndarray | None:
+    """An equirectangular sky [128, 256, 3] for an outdoor setting, picked by seed (None: indoor,
+    or no panorama installed)."""
+    names = SETTING_SKIES.get(setting)
+    if not names:
+        return None
+    skies = sorted((r for r in asset_index() if r.kind == "sky" and r.name.lower() in names), key=lambda r: r.id)
+    if not skies:
+        return None
+    record = skies[int(np.random.default_rng([seed, 4]).integers(len(skies)))]
+    try:
+        return _sky_image(record.path)
+    except AssetError:
+        return None

@@ -17,6 +17,7 @@ from ..limits import check_render_size
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
+from ..scene.sky import sky_background
 
 __all__ = ["RenderOutput", "render", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
@@ -67,7 +68,7 @@ def render(
         camera: a `Camera`, or a list of Cameras of one resolution (outputs gain a leading [C]).
         t: seconds into the clip, for scenes (`ValueError` outside [0, duration]).
         backend: "cpu" (compiled kernels, default), "torch" (reference) or "gsplat" (CUDA).
-        background: RGB in [0, 1]; default the first scene's background, else black.
+        background: RGB in [0, 1]; default the first scene's sky (numpy renders) or background, else black.
         features: also render the D-channel latent feature map.
 
     Returns:
@@ -93,9 +94,11 @@ def render(
             gaussians.append(p)
         else:
             raise ValueError(f"Expected a Scene4D or Gaussians to render, found {type(p).__name__}")
+    sky = None
     if background is None:
-        scene_bg = next((p.background for p in parts if isinstance(p, Scene4D)), (0.0, 0.0, 0.0))
-        background = scene_bg
+        first = next((p for p in parts if isinstance(p, Scene4D)), None)
+        background = first.background if first is not None else (0.0, 0.0, 0.0)
+        sky = first.sky if first is not None else None
     bg = np.asarray(background, dtype=np.float64)
     if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
@@ -119,10 +122,19 @@ def render(
                         background=torch.as_tensor(bg, dtype=dtype), nears=torch.as_tensor(nears),
                         backend=backend)
     else:
-        out = _render_numpy(g, viewmats, Ks, nears, width, height, bg, features, backend)
+        out = _render_numpy(g, viewmats, Ks, nears, width, height, np.zeros(3) if sky is not None else bg, features,
+                            backend)
+        if sky is not None:
+            out["rgb"] = composite_sky(out["rgb"], out["alpha"], sky, cams)
     if single:
         out = {k: (None if v is None else v[0]) for k, v in out.items()}
     return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
+
+
+def composite_sky(rgb: np.ndarray, alpha: np.ndarray, sky: np.ndarray, cams: Sequence[Camera]) -> np.ndarray:
+    """Renders on black [C, H, W, 3] with the sky behind what the Gaussians leave uncovered."""
+    behind = np.stack([sky_background(sky, c) for c in cams])
+    return (rgb + (1.0 - alpha[..., None]) * behind).astype(rgb.dtype)
 
 
 def cameras_to_arrays(cams: Sequence[Camera]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:

@@ -16,6 +16,7 @@ from .camera import Camera
 from .features import FeatureDecoder
 from .gaussians import Gaussians
 from .motion import Motion
+from .sky import check_sky
 
 __all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE"]
 
@@ -103,6 +104,8 @@ class Scene4D:
         provenance: prompt, seed, backends and the edit history.
         background: RGB in [0, 1] shown where no Gaussian covers a pixel.
         parent: the scene this one was edited from (for `undo`), if any.
+        sky: an equirectangular sky image [H, W, 3] in [0, 1] (see `scene.sky`) that `render` shows
+            behind the Gaussians instead of `background`, or None.
 
     Examples:
         >>> scene.at(1.0)            # world Gaussians 1 s into the clip (read-only)  # doctest: +SKIP
@@ -118,6 +121,7 @@ class Scene4D:
     provenance: Provenance = field(default_factory=Provenance)
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     parent: "Scene4D | None" = None
+    sky: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.gaussians, Gaussians) or self.gaussians.is_torch:
@@ -158,6 +162,8 @@ class Scene4D:
         if len(bg) != 3 or not all(0.0 <= x <= 1.0 for x in bg):
             raise ValueError(f"Expected background as 3 numbers in [0, 1], found {self.background!r}")
         self.background = bg
+        if self.sky is not None:
+            self.sky = check_sky(self.sky)
         _freeze(self.gaussians)
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
@@ -328,6 +334,8 @@ class Scene4D:
         out.update({f"motion/{k}": v for k, v in self.motion.arrays().items()})
         for name, dec in self.decoders.items():
             out.update({f"decoders/{name}/{k}": v for k, v in dec.arrays().items()})
+        if self.sky is not None:
+            out["sky"] = self.sky
         return out
 
     def metadata(self) -> dict:

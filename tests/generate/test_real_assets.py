@@ -56,3 +56,17 @@ def test_edit_on_real_asset_scene(real):
     out = SceneEditor().edit(scene, "remove the chair")
     assert not np.any(out.gaussians.object_ids == 1)
     assert all(o.asset is not None for o in out.objects if o.role == "object")
+
+
+def test_sky_seen_in_a_novel_view_and_saved(real, tmp_path):
+    from morphosim_gym.render import render
+    from morphosim_gym.scene import Camera, load_scene, save_scene
+    from morphosim_gym.scene.sky import sky_background
+    scene = _chair(0, text="a chair on the grass")
+    if scene.sky is None:
+        pytest.skip("needs Blender's sky panoramas (apt install blender-data)")
+    up = Camera.look_at((0, -1, 1), (0, 0, 40), 32, 32, 60)     # looking at the zenith, over everything
+    out = render(scene, up, 0.0)
+    np.testing.assert_allclose(out.rgb, sky_background(scene.sky, up), atol=0.05)
+    save_scene(scene, tmp_path / "s.msim")
+    np.testing.assert_array_equal(load_scene(tmp_path / "s.msim").sky, scene.sky)
