@@ -12,6 +12,7 @@ Open categories ("cylinder", "asset:sweethome3d/.../teapot") are not in `vocabul
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -25,6 +26,7 @@ __all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_open", "
 
 ASSET_PREFIX = "asset:"
 OPEN_FLOOR = 0.5          # cosine similarity an open candidate needs (made-up words stay below ~0.45)
+NAME_FLOOR = 0.3          # ... when the noun's words are words of the candidate's name ("fan" -> "Ceiling fan")
 # shape -> words that name it exactly
 SHAPES: dict[str, tuple[str, ...]] = {
     "cylinder": ("cylinder", "cylinders", "tube", "pipe"),
@@ -95,7 +97,20 @@ def nearest_candidates(phrase: str, k: int = 5) -> list[OpenMatch]:
     return [OpenMatch(labels[i], texts[i], round(float(sims[i]), 4)) for i in order]
 
 
+def _words(text: str) -> set[str]:
+    words = set(re.findall(r"[a-z0-9]+", text.lower()))
+    return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")}
+
+
 def ground_open(phrase: str, floor: float = OPEN_FLOOR) -> OpenMatch | None:
-    """The best open candidate for "a <phrase>" when it reaches `floor`, else None."""
-    best = nearest_candidates(phrase, k=1)
-    return best[0] if best and best[0].similarity >= floor else None
+    """The best open candidate for "a <phrase>": among those whose name holds the phrase's words
+    (similarity >= `NAME_FLOOR`), else overall when it reaches `floor`; None when neither."""
+    labels, texts, vecs = _all_candidates()
+    sims = vecs @ embeddings.embed([f"a {phrase}"])[0]
+    want = _words(phrase)
+    named = [i for i, t in enumerate(texts) if want and want <= _words(t) and sims[i] >= NAME_FLOOR]
+    pool = named or [int(np.argmax(sims))]
+    best = max(pool, key=lambda i: (float(sims[i]), -i))
+    if not named and sims[best] < floor:
+        return None
+    return OpenMatch(labels[best], texts[best], round(float(sims[best]), 4))

@@ -44,3 +44,14 @@ def test_teapot_is_a_teapot(real):
 def test_nonsense_lists_candidates(real):
     with pytest.raises(CommandError, match="florbnax.*Nearest shapes and assets: .+\\(0\\.\\d\\d\\)"):
         parse("a florbnax")
+
+
+def test_name_match_beats_the_floor(real):
+    # "fan": the asset names hold the word, the embedding alone is below the floor
+    assert "fan" in parse("a fan").objects[0].category
+
+
+def test_noun_list_has_300():
+    from pathlib import Path
+    nouns = [n for n in (Path(__file__).parent / "nouns_300.txt").read_text().splitlines() if n and n[0] != "#"]
+    assert len(nouns) >= 300 and len(set(nouns)) == len(nouns)
