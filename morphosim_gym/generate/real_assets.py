@@ -24,6 +24,7 @@ import re
 import numpy as np
 
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
+from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
 
 __all__ = ["ASSET_MODES", "ASSET_PREFIX", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
@@ -85,13 +86,21 @@ def _words(text: str) -> set[str]:
 def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRecord, ...]:
     index = _index_for(sources)
     want = _words(category.replace("_", " "))
-    hits = [r for r in index if r.kind in ("mesh", "splat")
-            and (r.category == category or (want and want <= _words(r.name)))]
+    entry = CATEGORIES.get(category)
+    synonyms = {w.lower() for w in (entry.synonyms if entry is not None else ()) if " " not in w}
+
+    def matches(r: AssetRecord) -> bool:
+        words = _WORD.findall(r.name.lower())
+        head = words[-1] if words else ""
+        return r.category == category or bool(want and want <= _words(r.name)) or head in synonyms
+
+    hits = [r for r in index if r.kind in ("mesh", "splat") and matches(r)]
     return tuple(sorted(hits, key=lambda r: r.id))
 
 
 def asset_candidates(category: str) -> tuple[AssetRecord, ...]:
-    """Every mesh or splat asset matching a category: same category, or the name holds its words (by id)."""
+    """Every mesh or splat asset matching a category: same category, or the name holds the words of
+    its name, or its last word is one of its vocabulary synonyms ("person": "Sitting boy"), by id."""
     if category.startswith(ASSET_PREFIX):
         aid = category[len(ASSET_PREFIX):]
         index = asset_index()
