@@ -209,13 +209,15 @@ class MorphoSimEnv(gym.Env):
 
     def _render(self, t: float) -> tuple[Views, TaskView]:
         """Every render camera's view at scene time t, and the task camera's `TaskView`."""
-        sources, cams, background = self._render_request(t)
-        return self._rendered(cams, render_scene(sources, cams, background=background), t)
+        sources, cams, background, sky = self._render_request(t)
+        return self._rendered(cams, render_scene(sources, cams, background=background, sky=sky), t)
 
-    def _render_request(self, t: float) -> tuple[list, list, tuple]:
-        """What `_render` draws at time t: (Gaussian sources, one camera per render camera, background)."""
+    def _render_request(self, t: float) -> tuple[list, list, tuple, Optional[np.ndarray]]:
+        """What `_render` draws at time t: (Gaussian sources, one camera per render camera, background,
+        the scene's sky or None)."""
         w, h = self.config.width, self.config.height
-        return self._sources(t), [self._rig.camera(n, w, h) for n in self._render_cams], self._world.scene.background
+        scene = self._world.scene
+        return self._sources(t), [self._rig.camera(n, w, h) for n in self._render_cams], scene.background, scene.sky
 
     def _rendered(self, cams: list, out: Any, t: float) -> tuple[Views, TaskView]:
         """`_render`'s result from the render of its request (`out.rgb[i]` etc. per camera i)."""
@@ -231,7 +233,8 @@ class MorphoSimEnv(gym.Env):
             return None
         cam = self._rig.camera(self._observe.cameras[0], self.config.render_width, self.config.render_height)
         with numba_threads(self.config.render_threads):
-            out = render_scene(self._sources(self.world.t), cam, background=self.world.scene.background)
+            out = render_scene(self._sources(self.world.t), cam, background=self.world.scene.background,
+                               sky=self.world.scene.sky)
         return out.rgb_uint8()
 
     # ================================================================== info

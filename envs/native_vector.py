@@ -179,11 +179,11 @@ class MorphoSimVectorEnv(VectorEnv):
             env = self.envs[i]
             with numba_threads(env.config.render_threads):
                 requests.append(env._render_request(env.world.t))
-        views = [(sources, cam, bg) for sources, cams, bg in requests for cam in cams]
+        views = [(sources, cam, bg, sky) for sources, cams, bg, sky in requests for cam in cams]
         with numba_threads(self.render_threads):
             outs = render_batch(views, backend=self.backend)
         rendered, k = [], 0
-        for i, (_, cams, _) in zip(indices, requests):
+        for i, (_, cams, _, _) in zip(indices, requests):
             mine = outs[k:k + len(cams)]
             k += len(cams)
             out = SimpleNamespace(rgb=[o.rgb for o in mine], depth=[o.depth for o in mine],

@@ -1,10 +1,16 @@
 """Shared fixtures: small deterministic scenes built directly from the scene types."""
 
+import os
+
 import numpy as np
 import pytest
 
 from morphosim_gym.scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from morphosim_gym.scene.rotations import axis_angle_to_quat
+
+# The suite's expectations encode the procedural generator; tests of real assets opt in
+# (monkeypatch MORPHOSIM_ASSET_SOURCES, see tests/generate/test_real_assets.py).
+os.environ.setdefault("MORPHOSIM_ASSET_SOURCES", "")
 
 
 def make_tiny_scene(n_per_object: int = 200, frames: int = 9, fps: float = 4.0, seed: int = 0,

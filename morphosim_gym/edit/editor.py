@@ -59,7 +59,8 @@ class SceneEditor:
             result = self.apply(result, op)
         prov = scene.provenance
         return result.derive(None, provenance=Provenance(prov.prompt, prov.seed, prov.generator, prov.reconstruction,
-                                                         prov.edits + (text.strip(),)), parent=scene)
+                                                         prov.edits + (text.strip(),), prov.substitutions),
+                             parent=scene)
 
     # ------------------------------------------------------------- one op
     def select(self, scene: Scene4D, op: Any) -> Selection:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..scene.parts import Part, Texture, euler
 
-__all__ = ["CategorySpec", "CATEGORY_SPECS", "build_parts", "category_names"]
+__all__ = ["CategorySpec", "CATEGORY_SPECS", "SHAPE_SPECS", "build_parts", "category_names"]
 
 DARK = (0.08, 0.08, 0.09)
 TIRE = (0.07, 0.07, 0.08)
@@ -451,6 +451,29 @@ CATEGORY_SPECS: dict[str, CategorySpec] = {s.name: s for s in [
 ]}
 
 
+# ------------------------------------------------------------ basic shapes (always available)
+_SHAPE_TEXTURE = Texture("noise", scale=12.0, amount=0.05)
+
+
+def _shape(shape: str, params: dict, z: float, rotation=None) -> Callable[[], list[Part]]:
+    def build() -> list[Part]:
+        return [Part(shape, params, (0, 0, z), euler() if rotation is None else rotation, textures=[_SHAPE_TEXTURE])]
+    return build
+
+
+# shape name -> spec; grounded by name (open vocabulary), never by the rule vocabulary
+SHAPE_SPECS: dict[str, CategorySpec] = {s.name: s for s in [
+    CategorySpec("cylinder", _shape("cylinder", dict(radius=0.12, height=0.3), 0.0), (0.2, 0.45, 0.8), "ground", "table", 1400),
+    CategorySpec("sphere", _shape("ellipsoid", dict(radii=(0.15, 0.15, 0.15)), 0.15), (0.85, 0.2, 0.15), "ground", "ground", 1400,
+                 rolls=True),
+    CategorySpec("torus", _shape("torus", dict(major=0.15, minor=0.05), 0.05), (0.9, 0.7, 0.2), "ground", "table", 1400),
+    CategorySpec("capsule", _shape("capsule", dict(radius=0.08, length=0.25), 0.08), (0.3, 0.7, 0.4), "ground", "table", 1400),
+    CategorySpec("pyramid", _shape("pyramid", dict(base=0.3, height=0.25), 0.0), (0.85, 0.75, 0.45), "ground", "ground", 1400),
+    CategorySpec("disc", _shape("cylinder", dict(radius=0.15, height=0.02), 0.0), (0.7, 0.7, 0.75), "ground", "table", 1200),
+    CategorySpec("plank", _shape("box", dict(size=(0.8, 0.15, 0.03)), 0.015), (0.6, 0.42, 0.25), "ground", "ground", 1400),
+]}
+
+
 def category_names() -> list[str]:
     """All categories the library can build."""
     return sorted(CATEGORY_SPECS)
@@ -458,6 +481,8 @@ def category_names() -> list[str]:
 
 def build_parts(category: str) -> list[Part]:
     """The parts of one object of this category (nominal size, object frame)."""
-    if category not in CATEGORY_SPECS:
-        raise ValueError(f"Expected a category of the library, found {category!r}; known: {category_names()}")
-    return CATEGORY_SPECS[category].build()
+    spec = CATEGORY_SPECS.get(category) or SHAPE_SPECS.get(category)
+    if spec is None:
+        raise ValueError(f"Expected a category of the library, found {category!r}; known: {category_names()} "
+                         f"and the shapes {sorted(SHAPE_SPECS)}")
+    return spec.build()

@@ -96,6 +96,9 @@ def _generate(args: argparse.Namespace) -> int:
         for f in stage.iterdir():
             shutil.move(str(f), out / f.name)
     print(json.dumps({k: summary[k] for k in ("prompt", "seed", "seconds", "setting", "edits")}))
+    for o in plan.objects:
+        if o.grounding in ("embedding", "open"):
+            print(f"noun {o.noun!r} is not in the library: using {o.category} (similarity {o.similarity:.2f})")
     print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
     return 0
 

@@ -15,6 +15,7 @@ Layout rules (documented so that users can predict a scene from its prompt):
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from types import SimpleNamespace
@@ -26,9 +27,12 @@ from ..limits import check_clip_size
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
+from ..scene.sky import check_sky
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
-from .assets import CATEGORY_SPECS, build_parts
-from .color_match import match_mean_color
+from .assets import CATEGORY_SPECS, SHAPE_SPECS, CategorySpec, build_parts
+from . import open_assets  # noqa: F401  (registers real assets as open-vocabulary candidates)
+from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, setting_sky, uses_assets
+from .color_match import match_mean_color, tint_keep_shading
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
 
@@ -52,6 +56,8 @@ class GenerationConfig:
         detail: multiplier on every Gaussian budget (1.0: ~2-3k per object, ~9k for the setting).
         setting_budget: Gaussians of the setting at detail 1.
         frame_fraction: width of the largest moving object as a fraction of the image width.
+        assets: "auto" (real assets where installed, see `real_assets`), "off" (procedural only,
+            bit-identical to the generator without assets) or "require".
     """
 
     num_frames: int = 49
@@ -62,6 +68,7 @@ class GenerationConfig:
     detail: float = 1.0
     setting_budget: int = 9000
     frame_fraction: float = 0.3
+    assets: str = "auto"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.num_frames, int) and 1 <= self.num_frames <= 1000):
@@ -77,6 +84,8 @@ class GenerationConfig:
             raise ValueError(f"Expected detail in (0, 16], found {self.detail!r}")
         if not 0 < self.frame_fraction < 1:
             raise ValueError(f"Expected frame_fraction in (0, 1), found {self.frame_fraction!r}")
+        if self.assets not in ASSET_MODES:
+            raise ValueError(f"Expected assets in {ASSET_MODES}, found {self.assets!r}")
 
 
 @dataclass
@@ -95,6 +104,7 @@ class Instance:
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
     trajectory: PlannedTrajectory | None = None
     mobility: str = "ground"
+    asset: str | None = None       # "source/id" of the real asset used, None when procedural
 
 
 @dataclass
@@ -107,13 +117,23 @@ class ComposedScene:
     cameras: list[Camera]
 
 
+OPEN_SPEC = CategorySpec("asset", lambda: [], (0.7, 0.7, 0.7), "ground", "ground", 2400)
+
+
+def category_spec(category: str) -> CategorySpec | None:
+    """The spec of a library category, a basic shape, or an open "asset:<id>" category (None: unknown)."""
+    if category.startswith(ASSET_PREFIX):
+        return OPEN_SPEC
+    return CATEGORY_SPECS.get(category) or SHAPE_SPECS.get(category)
+
+
 def _instances(plan: Any, config: GenerationConfig) -> list[Instance]:
     out = []
     total = sum(o.count for o in plan.objects)
     if total > MAX_INSTANCES:
         raise ValueError(f"Expected at most {MAX_INSTANCES} object instances in one scene, found {total}")
     for spec in plan.objects:
-        cat = CATEGORY_SPECS.get(spec.category)
+        cat = category_spec(spec.category)
         if cat is None:
             raise ValueError(f"Expected a category of the generator's library, found {spec.category!r}; "
                              f"known: {sorted(CATEGORY_SPECS)}")
@@ -140,17 +160,39 @@ def _rescale(inst: Instance, factor: float) -> None:
     inst.half = inst.half * factor
 
 
-def _object_cloud(inst: Instance, rng: np.random.Generator, config: GenerationConfig) -> None:
-    cat = CATEGORY_SPECS[inst.category]
+@functools.lru_cache(maxsize=64)
+def _procedural_longest(category: str) -> float:
+    """Longest side (m) of the procedural builder's object: real assets take this size."""
+    c = parts_to_gaussians(build_parts(category), 400, np.full(3, 0.5), np.random.default_rng(0))
+    return float(np.max(c.means.max(0) - c.means.min(0)))
+
+
+def _base_cloud(inst: Instance, budget: int, rng: np.random.Generator, seed: int, k: int,
+                real: bool) -> SurfaceCloud:
+    """The object's cloud: a real asset where one matches (and `real`), else the procedural builder."""
+    open_cat = inst.category.startswith(ASSET_PREFIX)
+    record = pick_asset(inst.category, seed, k) if (real or open_cat) else None
+    if record is None:
+        if open_cat:
+            raise ValueError(f"Expected an installed asset for {inst.category!r}, found none")
+        return parts_to_gaussians(build_parts(inst.category), budget, inst.color, rng)
+    inst.asset = f"{record.source}/{record.id}" if not record.id.startswith(record.source + "/") else record.id
+    return asset_cloud(record, budget, None if open_cat else _procedural_longest(inst.category), seed=0)
+
+
+def _object_cloud(inst: Instance, rng: np.random.Generator, config: GenerationConfig, seed: int = 0, k: int = 0,
+                  real: bool = False) -> None:
+    cat = category_spec(inst.category)
     budget = max(200, int(cat.budget * config.detail))
-    cloud = parts_to_gaussians(build_parts(inst.category), budget, inst.color, rng)
+    cloud = _base_cloud(inst, budget, rng, seed, k, real)
     if inst.asked_color is not None:
         # the object as a whole reads as the asked colour: the mean of what a camera sees from the
         # side and slightly above (projected area of each surface Gaussian) matches in Lab
         normals = quat_to_matrix(cloud.quats)[:, :, 2]
         seen = np.abs(normals[:, 1]) * math.cos(VIEW_PITCH) + np.clip(normals[:, 2], 0, None) * math.sin(VIEW_PITCH)
         area = cloud.scales[:, 0] * cloud.scales[:, 1] * cloud.opacities * (0.05 + seen)
-        cloud.colors = match_mean_color(cloud.colors, area, inst.asked_color)
+        recolour = tint_keep_shading if inst.asset is not None else match_mean_color
+        cloud.colors = recolour(cloud.colors, area, inst.asked_color)
     cloud.means = cloud.means * inst.scale
     cloud.scales = cloud.scales * inst.scale
     lo, hi = cloud.means.min(0), cloud.means.max(0)
@@ -181,8 +223,9 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         spec = CATEGORY_SPECS["seaweed"]
         instances.append(Instance(dressing, "seaweed", "seaweed", np.asarray(spec.color), None, 1.0,
                                   mobility=spec.mobility))
+    real = uses_assets(config.assets)
     for k, inst in enumerate(instances):
-        _object_cloud(inst, np.random.default_rng([seed, 1, k]), config)
+        _object_cloud(inst, np.random.default_rng([seed, 1, k]), config, seed, k, real)
     motions = {m.target: m for m in plan.motions}
     by_spec: dict[str, list[Instance]] = {}
     for inst in instances:
@@ -259,13 +302,16 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         req = _request(m, inst, by_spec, top_of)
         vertical = inst.mobility in ("air", "swim")
         traj = plan_trajectory(req, cameras, config.num_frames, config.fps, inst.half, inst.position,
-                               vertical_plane=vertical, rolls=CATEGORY_SPECS[inst.category].rolls)
+                               vertical_plane=vertical, rolls=category_spec(inst.category).rolls)
         if req.path == "to" and req.end_height is not None:
             traj.positions[:, 2] = _rise_onto(traj.positions, req.end_height, inst.position[2])
         inst.trajectory = traj
         trajectories[inst.name] = traj
     # ---- assemble Gaussians, objects and the motion scaffold
     scene = _assemble(plan, instances, setting, cameras, config, seed, prompt)
+    sky = setting_sky(setting_name, seed) if real else None
+    if sky is not None:
+        scene.sky = check_sky(sky)    # set before anything reads (or hashes) the scene
     return ComposedScene(scene, trajectories, setting, cameras)
 
 
@@ -361,7 +407,7 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
     for k, inst in enumerate(instances):
         obj_id = k + 1
         objects.append(SceneObject(obj_id, inst.name, inst.category, color=inst.asked_color,
-                                   dynamic=inst.trajectory is not None))
+                                   dynamic=inst.trajectory is not None, asset=inst.asset))
         traj = inst.trajectory
         if traj is not None:
             pos, yaw, spin = traj.positions, traj.headings, traj.spins
@@ -407,5 +453,8 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
     motion = Motion.rigid(np.concatenate(parts["nodes"]), rotations, translations,
                           node_objects=np.arange(1, len(instances) + 1))
     text = prompt if prompt is not None else getattr(plan, "text", None)
-    return Scene4D(g, motion, objects, config.fps, cameras, provenance=Provenance(text, int(seed), "procedural", "none"),
+    subs = tuple((o.noun, o.category, o.similarity) for o in plan.objects
+                 if getattr(o, "grounding", None) in ("embedding", "open"))
+    return Scene4D(g, motion, objects, config.fps, cameras,
+                   provenance=Provenance(text, int(seed), "procedural", "none", substitutions=subs),
                    background=setting.background)

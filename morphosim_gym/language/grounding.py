@@ -27,7 +27,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import AmbiguousTargetError, CommandError, TargetNotFoundError
-from . import embeddings
+from . import embeddings, open_vocab
 from .lexicon import english_words
 from .vocabulary import CATEGORIES, SETTINGS, noun_to_category, singular, word_to_setting
 
@@ -111,6 +111,8 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     hit = ground_noun_vocabulary(noun, settings) or ground_noun_vocabulary(singular(noun), settings)
     if hit is not None:
         return hit
+    if open_vocab.shape_for_word(noun):                                   # open vocabulary: basic shapes
+        return Grounding(noun, open_vocab.shape_for_word(noun))
     if floor is None:
         words = english_words()
         floor = GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
@@ -120,12 +122,16 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     best = int(np.argmax(sims))
     score = float(sims[best])
     worst_reject = float(np.max(reject @ q))
+    opened = open_vocab.ground_open(phrase or noun, max(open_vocab.OPEN_FLOOR, floor))   # open vocabulary
+    if opened is not None and (opened.similarity > score or score < floor or worst_reject > score):
+        return Grounding(noun, opened.category, method="open", similarity=round(opened.similarity, 4))
     if score < floor or worst_reject > score:
         known = ", ".join(CATEGORIES)
         extra = f"; settings: {', '.join(SETTINGS)}" if settings else ""
         raise CommandError(f"Could not understand the noun {noun!r}: it is not close to any object category "
                            f"(best {labels[best][1]!r} at similarity {score:.2f}, needs {floor:.2f}). "
-                           f"Known categories: {known}{extra}")
+                           f"Known categories: {known}{extra}. Nearest shapes and assets: "
+                           + ", ".join(f"{m.text} ({m.similarity:.2f})" for m in open_vocab.nearest_candidates(phrase or noun)))
     kind, category = labels[best]
     return Grounding(noun, category, kind=kind, method="embedding", similarity=round(score, 4))
 

@@ -43,6 +43,7 @@ from typing import Any, ClassVar, Mapping, Sequence
 
 from ..colors import color_rgb
 from ..errors import CommandError
+from .open_vocab import is_open_category
 from .vocabulary import CATEGORIES, SETTINGS
 
 __all__ = ["MODES", "PATHS", "CAMERA_MOTIONS", "CAMERA_DIRECTIONS", "EDIT_OPS", "RECOLOR_MODES", "MAX_COUNT",
@@ -59,7 +60,7 @@ CAMERA_DIRECTIONS: dict[str, tuple[str | None, ...]] = {
 }
 EDIT_OPS = ("recolor", "remove", "extract", "reverse", "redirect", "speed", "stop", "camera")
 RECOLOR_MODES = ("assign", "additive", "multiplicative")
-GROUNDINGS = ("vocabulary", "embedding", "given")
+GROUNDINGS = ("vocabulary", "embedding", "open", "given")
 MAX_COUNT = 20
 MAX_SPEED = 10.0
 
@@ -195,7 +196,8 @@ class ObjectSpec(_Spec):
         size: size word as written ("small", "very large"), or None.
         scale: size factor from the size word (1.0 = normal).
         count: how many instances (from "two balls", "a herd of sheep"...).
-        grounding: "vocabulary" (rule table), "embedding" (nearest category by MiniLM) or "given".
+        grounding: "vocabulary" (rule table), "embedding" (nearest category by MiniLM), "open" (a basic
+            shape or real asset by MiniLM, see `open_vocab`) or "given".
         similarity: cosine similarity of the embedding grounding, else None.
     """
 
@@ -212,7 +214,8 @@ class ObjectSpec(_Spec):
     def __post_init__(self) -> None:
         _str(self.name, "object.name")
         _str(self.noun, "object.noun")
-        _str(self.category, "object.category", list(CATEGORIES))
+        open_cat = isinstance(self.category, str) and is_open_category(self.category)
+        _str(self.category, "object.category", None if open_cat else list(CATEGORIES))
         _str(self.size, "object.size", optional=True)
         object.__setattr__(self, "scale", _num(self.scale, "object.scale", 0.0, 10.0, open_lo=True))
         if isinstance(self.count, bool) or not isinstance(self.count, int) or not 1 <= self.count <= MAX_COUNT:

@@ -85,7 +85,18 @@ _CATEGORY_LIST: tuple[Category, ...] = (
     _c("train", "locomotive", "", "a train on a railway"),
 )
 
-CATEGORIES: dict[str, Category] = {c.name: c for c in _CATEGORY_LIST}
+class _Categories(dict):
+    """The library's categories; indexing with an open-vocabulary category (a basic shape or
+    "asset:<id>", see `open_vocab`) gives a generic entry, while iteration and `in` stay the library's."""
+
+    def __missing__(self, key: str) -> Category:
+        from .open_vocab import is_open_category
+        if isinstance(key, str) and is_open_category(key):
+            return Category(key, description=f"a {key}")
+        raise KeyError(key)
+
+
+CATEGORIES: dict[str, Category] = _Categories({c.name: c for c in _CATEGORY_LIST})
 
 # Settings (backgrounds) and the words that name them.
 SETTINGS: dict[str, tuple[str, ...]] = {

@@ -18,6 +18,7 @@ from ..parallel import serialised
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
+from ..scene.sky import check_sky, sky_background
 
 __all__ = ["RenderOutput", "render", "render_batch", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
@@ -59,6 +60,7 @@ def render(
     backend: str = "cpu",
     background: Optional[Sequence[float]] = None,
     features: bool = False,
+    sky: Optional[np.ndarray] = None,
 ) -> RenderOutput:
     """Render a scene at time `t` (or plain Gaussians) from one or several cameras in one pass.
 
@@ -69,8 +71,11 @@ def render(
         camera: a `Camera`, or a list of Cameras of one resolution (outputs gain a leading [C]).
         t: seconds into the clip, for scenes (`ValueError` outside [0, duration]).
         backend: "cpu" (compiled kernels, default), "torch" (reference) or "gsplat" (CUDA).
-        background: RGB in [0, 1]; default the first scene's background, else black.
+        background: RGB in [0, 1]; default the first scene's sky (numpy renders) or background, else black.
         features: also render the D-channel latent feature map.
+        sky: an equirectangular sky image [H', W', 3] in [0, 1] (`scene.sky`) shown behind what the
+            Gaussians leave uncovered (numpy renders); default the first scene's when no
+            `background` is given. Envs pass their scene's sky with their plain Gaussians.
 
     Returns:
         RenderOutput: rgb [H, W, 3], depth [H, W], alpha [H, W], instance [H, W] and, with
@@ -84,7 +89,7 @@ def render(
     """
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
-    g, bg = _resolve_source(source, t, background)
+    g, bg, sky = _resolve_source(source, t, background, sky)
     if features and g.feature_dim == 0:
         raise ValueError("Expected Gaussians with features for features=True, found none "
                          "(this scene has no distilled feature field)")
@@ -104,13 +109,16 @@ def render(
                         background=torch.as_tensor(bg, dtype=dtype), nears=torch.as_tensor(nears),
                         backend=backend)
     else:
-        out = _render_numpy(g, viewmats, Ks, nears, width, height, bg, features, backend)
+        out = _render_numpy(g, viewmats, Ks, nears, width, height, np.zeros(3) if sky is not None else bg, features,
+                            backend)
+        if sky is not None:
+            out["rgb"] = composite_sky(out["rgb"], out["alpha"], sky, cams)
     if single:
         out = {k: (None if v is None else v[0]) for k, v in out.items()}
     return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
 
 
-View = tuple   # (source, camera) or (source, camera, background)
+View = tuple   # (source, camera), (source, camera, background) or (source, camera, background, sky)
 
 
 @serialised
@@ -148,46 +156,54 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
     resolved = [_resolve_view(i, view, t) for i, view in enumerate(views)]
-    for _, cam, _ in resolved:
+    for _, cam, _, _ in resolved:
         check_render_size(len(resolved), cam.width, cam.height)
     if features:
-        for i, (parts, _, _) in enumerate(resolved):
+        for i, (parts, _, _, _) in enumerate(resolved):
             if Gaussians.concat(parts).feature_dim == 0:
                 raise ValueError(f"Expected Gaussians with features for features=True, found none in view {i}")
-    if backend == "torch" or any(p.is_torch for parts, _, _ in resolved for p in parts):
-        return [render(parts, cam, backend=backend, background=bg, features=features) for parts, cam, bg in resolved]
+    if backend == "torch" or any(p.is_torch for parts, _, _, _ in resolved for p in parts):
+        return [render(parts, cam, backend=backend, background=bg, features=features) for parts, cam, bg, _ in resolved]
+    flat = [(parts, cam, np.zeros(3) if sky is not None else bg) for parts, cam, bg, sky in resolved]
     if backend == "gsplat":
         from .gsplat_backend import render_batch_gsplat
 
-        outs = render_batch_gsplat(resolved, features=features)
+        outs = render_batch_gsplat(flat, features=features)
     else:
         from .cpu.batch import batch_view, rasterize_batch_numpy
 
         outs = rasterize_batch_numpy([batch_view(parts, cam.world_to_camera, cam.K, cam.near, cam.width, cam.height,
-                                                 bg) for parts, cam, bg in resolved], features=features, cull=cull)
+                                                 bg) for parts, cam, bg in flat], features=features, cull=cull)
+    for o, (_, cam, _, sky) in zip(outs, resolved):
+        if sky is not None:          # as `render` does: the sky behind what the Gaussians leave uncovered
+            o["rgb"] = composite_sky(o["rgb"][None], o["alpha"][None], sky, [cam])[0]
     return [RenderOutput(**{k: o.get(k) for k in _OUTPUT_KEYS}) for o in outs]
 
 
-def _resolve_view(i: int, view: View, t: float) -> tuple[list[Gaussians], Camera, np.ndarray]:
-    if not isinstance(view, (tuple, list)) or len(view) not in (2, 3):
-        raise ValueError(f"Expected view {i} as (source, camera) or (source, camera, background), found {view!r}")
+def _resolve_view(i: int, view: View, t: float) -> tuple[list[Gaussians], Camera, np.ndarray, Optional[np.ndarray]]:
+    if not isinstance(view, (tuple, list)) or len(view) not in (2, 3, 4):
+        raise ValueError(f"Expected view {i} as (source, camera), (source, camera, background) or (source, camera, "
+                         f"background, sky), found {view!r}")
     source, camera = view[0], view[1]
     if not isinstance(camera, Camera):
         raise ValueError(f"Expected one Camera in view {i}, found {type(camera).__name__}")
-    parts, bg = _source_parts(source, t, view[2] if len(view) == 3 else None)
-    return parts, camera, bg
+    parts, bg, sky = _source_parts(source, t, view[2] if len(view) >= 3 else None, view[3] if len(view) == 4 else None)
+    return parts, camera, bg, sky
 
 
-def _resolve_source(source: Source, t: float, background: Optional[Sequence[float]]) -> tuple[Gaussians, np.ndarray]:
-    """The Gaussians of a render source at time t (parts concatenated) and its checked background."""
-    parts, bg = _source_parts(source, t, background)
-    return Gaussians.concat(parts), bg
+def _resolve_source(source: Source, t: float, background: Optional[Sequence[float]],
+                    sky: Optional[np.ndarray] = None) -> tuple[Gaussians, np.ndarray, Optional[np.ndarray]]:
+    """The Gaussians of a render source at time t (parts concatenated), its checked background and
+    its sky (given, or the first scene's when no background is given, else None)."""
+    parts, bg, sky = _source_parts(source, t, background, sky)
+    return Gaussians.concat(parts), bg, sky
 
 
-def _source_parts(source: Source, t: float,
-                  background: Optional[Sequence[float]]) -> tuple[list[Gaussians], np.ndarray]:
-    """The parts of a render source as Gaussians at time t, and the checked background
-    (default: the first scene's, else black)."""
+def _source_parts(source: Source, t: float, background: Optional[Sequence[float]],
+                  sky: Optional[np.ndarray] = None) -> tuple[list[Gaussians], np.ndarray, Optional[np.ndarray]]:
+    """The parts of a render source as Gaussians at time t, the checked background (default: the
+    first scene's, else black) and the sky behind it (the first scene's, only when no background
+    is given)."""
     parts = list(source) if isinstance(source, (list, tuple)) else [source]
     if not parts:
         raise ValueError("Expected a Scene4D or Gaussians to render, found an empty list")
@@ -199,13 +215,24 @@ def _source_parts(source: Source, t: float,
             gaussians.append(p)
         else:
             raise ValueError(f"Expected a Scene4D or Gaussians to render, found {type(p).__name__}")
+    if sky is not None and not (isinstance(sky, np.ndarray) and sky.dtype == np.float32 and sky.ndim == 3
+                                and not sky.flags.writeable):      # a scene's sky is checked (and frozen) already
+        sky = check_sky(sky)
+    elif sky is None and background is None:
+        first = next((p for p in parts if isinstance(p, Scene4D)), None)
+        sky = first.sky if first is not None else None
     if background is None:
-        scene_bg = next((p.background for p in parts if isinstance(p, Scene4D)), (0.0, 0.0, 0.0))
-        background = scene_bg
+        first = next((p for p in parts if isinstance(p, Scene4D)), None)
+        background = first.background if first is not None else (0.0, 0.0, 0.0)
     bg = np.asarray(background, dtype=np.float64)
     if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
-    return gaussians, bg
+    return gaussians, bg, sky
+
+def composite_sky(rgb: np.ndarray, alpha: np.ndarray, sky: np.ndarray, cams: Sequence[Camera]) -> np.ndarray:
+    """Renders on black [C, H, W, 3] with the sky behind what the Gaussians leave uncovered."""
+    behind = np.stack([sky_background(sky, c) for c in cams])
+    return (rgb + (1.0 - alpha[..., None]) * behind).astype(rgb.dtype)
 
 
 def cameras_to_arrays(cams: Sequence[Camera]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:

@@ -161,6 +161,31 @@ def capsule(n: int, rng: np.random.Generator, radius: float = 0.5, length: float
     return Surface(np.concatenate(pts), np.concatenate(nrm), np.concatenate(uvs))
 
 
+def pyramid(n: int, rng: np.random.Generator, base: float = 1.0, height: float = 1.0) -> Surface:
+    """Square pyramid: base `base` x `base` centred in the z=0 plane (normal -z), apex at z=height."""
+    half = base / 2
+    slant = math.hypot(half, height)
+    side = half * slant * 2                      # each triangle: base * slant / 2
+    counts = split_counts(n, np.array([side] * 4 + [base * base]))
+    pts, nrm, uvs = [], [], []
+    for k, face in enumerate(counts[:4]):
+        u = _stratified(face, rng)
+        a, b = np.sqrt(u[:, 0]), u[:, 1]          # uniform on a triangle: apex -> base edge
+        ang = k * math.pi / 2
+        cx, cy = math.cos(ang), math.sin(ang)
+        along = (b - 0.5) * base * a
+        p = np.c_[half * a * cx - along * cy, half * a * cy + along * cx, height * (1 - a)]
+        normal = _unit(np.array([cx * height, cy * height, half]))
+        pts.append(p)
+        nrm.append(np.tile(normal, (face, 1)))
+        uvs.append(np.c_[b, 1 - a])
+    u = _stratified(counts[4], rng)
+    pts.append(np.c_[(u[:, 0] - 0.5) * base, (u[:, 1] - 0.5) * base, np.zeros(counts[4])])
+    nrm.append(np.tile([0.0, 0, -1], (counts[4], 1)))
+    uvs.append(u)
+    return Surface(np.concatenate(pts), np.concatenate(nrm), np.concatenate(uvs))
+
+
 def split_counts(n: int, weights: np.ndarray) -> list[int]:
     """Split n into integer counts proportional to weights (largest remainders)."""
     w = np.asarray(weights, dtype=np.float64)
@@ -202,6 +227,7 @@ SHAPES: dict[str, tuple[Callable[..., Surface], Callable[..., float]]] = {
     "plane": (plane, lambda size=(1.0, 1.0): float(size[0] * size[1])),
     "torus": (torus, lambda major=1.0, minor=0.25: 4 * math.pi ** 2 * major * minor),
     "capsule": (capsule, lambda radius=0.5, length=1.0: 2 * math.pi * radius * length + 4 * math.pi * radius ** 2),
+    "pyramid": (pyramid, lambda base=1.0, height=1.0: base * base + 2 * base * math.hypot(base / 2, height)),
 }
 
 

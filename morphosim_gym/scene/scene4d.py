@@ -16,6 +16,7 @@ from .camera import Camera
 from .features import FeatureDecoder
 from .gaussians import Gaussians
 from .motion import Motion
+from .sky import check_sky
 
 __all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE"]
 
@@ -33,6 +34,7 @@ class SceneObject:
         color: RGB in [0, 1] the object was asked to have, if any.
         dynamic: whether the object moves.
         role: "object", "background" (ground, water, sky...) or "agent".
+        asset: the real asset its Gaussians came from ("source/id"), or None for a procedural one.
     """
 
     id: int
@@ -41,6 +43,7 @@ class SceneObject:
     color: tuple[float, float, float] | None = None
     dynamic: bool = False
     role: str = "object"
+    asset: str | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.id, bool) or not isinstance(self.id, (int, np.integer)) or self.id < 0:
@@ -57,8 +60,11 @@ class SceneObject:
             object.__setattr__(self, "color", c)
 
     def to_dict(self) -> dict:
-        """JSON-friendly form."""
-        return asdict(self)
+        """JSON-friendly form (`asset` only when set, so procedural scenes save as before)."""
+        d = asdict(self)
+        if d["asset"] is None:
+            del d["asset"]
+        return d
 
 
 @dataclass(frozen=True)
@@ -70,11 +76,16 @@ class Provenance:
     generator: str = "unknown"
     reconstruction: str = "none"
     edits: tuple[str, ...] = ()
+    substitutions: tuple[tuple[str, str, float | None], ...] = ()   # (asked noun, chosen, similarity)
 
     def to_dict(self) -> dict:
-        """JSON-friendly form."""
+        """JSON-friendly form (`substitutions` only when there are some)."""
         d = asdict(self)
         d["edits"] = list(self.edits)
+        if self.substitutions:
+            d["substitutions"] = [list(x) for x in self.substitutions]
+        else:
+            del d["substitutions"]
         return d
 
 
@@ -93,6 +104,8 @@ class Scene4D:
         provenance: prompt, seed, backends and the edit history.
         background: RGB in [0, 1] shown where no Gaussian covers a pixel.
         parent: the scene this one was edited from (for `undo`), if any.
+        sky: an equirectangular sky image [H, W, 3] in [0, 1] (see `scene.sky`) that `render` shows
+            behind the Gaussians instead of `background`, or None.
 
     Examples:
         >>> scene.at(1.0)            # world Gaussians 1 s into the clip (read-only)  # doctest: +SKIP
@@ -108,6 +121,7 @@ class Scene4D:
     provenance: Provenance = field(default_factory=Provenance)
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     parent: "Scene4D | None" = None
+    sky: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.gaussians, Gaussians) or self.gaussians.is_torch:
@@ -148,6 +162,8 @@ class Scene4D:
         if len(bg) != 3 or not all(0.0 <= x <= 1.0 for x in bg):
             raise ValueError(f"Expected background as 3 numbers in [0, 1], found {self.background!r}")
         self.background = bg
+        if self.sky is not None:
+            self.sky = check_sky(self.sky)
         _freeze(self.gaussians)
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
@@ -285,7 +301,7 @@ class Scene4D:
         if edit is not None:
             prov = values["provenance"]
             values["provenance"] = Provenance(prov.prompt, prov.seed, prov.generator, prov.reconstruction,
-                                              prov.edits + (edit,))
+                                              prov.edits + (edit,), prov.substitutions)
             values["parent"] = self
         return Scene4D(**values)
 
@@ -318,6 +334,8 @@ class Scene4D:
         out.update({f"motion/{k}": v for k, v in self.motion.arrays().items()})
         for name, dec in self.decoders.items():
             out.update({f"decoders/{name}/{k}": v for k, v in dec.arrays().items()})
+        if self.sky is not None:
+            out["sky"] = self.sky
         return out
 
     def metadata(self) -> dict:
@@ -358,6 +376,7 @@ def provenance_from_dict(d: Mapping[str, Any]) -> Provenance:
     """Inverse of `Provenance.to_dict`."""
     d = dict(d)
     d["edits"] = tuple(d.get("edits", ()))
+    d["substitutions"] = tuple(tuple(x) for x in d.get("substitutions", ()))
     return Provenance(**d)
 
 

@@ -1,0 +1,116 @@
+"""Open vocabulary: a noun outside the rule vocabulary grounds to a basic shape or a real asset.
+
+Basic shapes (`SHAPES`) always exist and ground by name ("a green cylinder"). Other candidates
+come from tables that higher layers register (`register_candidates`): the generator registers
+every real asset's name, category and tags as "asset:<id>" so that this layer never imports the
+asset layer. `ground_open` compares the MiniLM embedding of "a <noun>" with every shape phrase and
+registered text; `grounding.ground_noun` uses it when it beats the nearest library category.
+
+Open categories ("cylinder", "asset:sweethome3d/.../teapot") are not in `vocabulary.CATEGORIES`
+(whose iteration, and so the rule grounding, is unchanged) but index it with a generic entry.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import embeddings
+
+__all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_open", "is_open_category",
+           "nearest_candidates", "register_candidates", "shape_for_word"]
+
+ASSET_PREFIX = "asset:"
+OPEN_FLOOR = 0.5          # cosine similarity an open candidate needs (made-up words stay below ~0.45)
+NAME_FLOOR = 0.3          # ... when the noun's words are words of the candidate's name ("fan" -> "Ceiling fan")
+# shape -> words that name it exactly
+SHAPES: dict[str, tuple[str, ...]] = {
+    "cylinder": ("cylinder", "cylinders", "tube", "pipe"),
+    "sphere": ("sphere", "spheres", "orb", "globe"),
+    "torus": ("torus", "tori", "donut shape", "ring shape"),
+    "capsule": ("capsule", "capsules", "pill"),
+    "pyramid": ("pyramid", "pyramids"),
+    "disc": ("disc", "discs", "disk", "disks"),
+    "plank": ("plank", "planks", "board", "beam"),
+}
+_WORD_TO_SHAPE = {w: s for s, words in SHAPES.items() for w in words}
+
+CandidateTable = Callable[[], tuple[list[str], list[str], np.ndarray]]   # -> labels, texts, vectors [N, D]
+_tables: dict[str, CandidateTable] = {}
+_lock = threading.Lock()
+_shape_table: list[np.ndarray] = []
+
+
+@dataclass(frozen=True)
+class OpenMatch:
+    """A candidate for a noun: its category label, the text it matched and the cosine similarity."""
+
+    category: str
+    text: str
+    similarity: float
+
+
+def register_candidates(name: str, table: CandidateTable) -> None:
+    """Add (or replace) a table of open candidates, called lazily on the first open grounding."""
+    with _lock:
+        _tables[name] = table
+
+
+def is_open_category(category: str) -> bool:
+    """A basic shape or an "asset:<id>" category."""
+    return category in SHAPES or category.startswith(ASSET_PREFIX)
+
+
+def shape_for_word(noun: str) -> str | None:
+    """The basic shape a word names exactly ("disk" -> "disc"), else None."""
+    return _WORD_TO_SHAPE.get(noun.strip().lower())
+
+
+def _shape_vectors() -> np.ndarray:
+    with _lock:
+        if not _shape_table:
+            _shape_table.append(embeddings.encode_table([f"a {s}" for s in SHAPES]))
+        return _shape_table[0]
+
+
+def _all_candidates() -> tuple[list[str], list[str], np.ndarray]:
+    labels, texts, vecs = list(SHAPES), [f"a {s}" for s in SHAPES], [_shape_vectors()]
+    for table in list(_tables.values()):
+        lab, txt, v = table()
+        if len(lab):
+            labels += lab
+            texts += txt
+            vecs.append(np.asarray(v, dtype=np.float32))
+    return labels, texts, np.concatenate(vecs)
+
+
+def nearest_candidates(phrase: str, k: int = 5) -> list[OpenMatch]:
+    """The `k` open candidates closest to "a <phrase>", best first."""
+    labels, texts, vecs = _all_candidates()
+    q = embeddings.embed([f"a {phrase}"])[0]
+    sims = vecs @ q
+    order = np.argsort(-sims, kind="stable")[:k]
+    return [OpenMatch(labels[i], texts[i], round(float(sims[i]), 4)) for i in order]
+
+
+def _words(text: str) -> set[str]:
+    words = set(re.findall(r"[a-z0-9]+", text.lower()))
+    return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")}
+
+
+def ground_open(phrase: str, floor: float = OPEN_FLOOR) -> OpenMatch | None:
+    """The best open candidate for "a <phrase>": among those whose name holds the phrase's words
+    (similarity >= `NAME_FLOOR`), else overall when it reaches `floor`; None when neither."""
+    labels, texts, vecs = _all_candidates()
+    sims = vecs @ embeddings.embed([f"a {phrase}"])[0]
+    want = _words(phrase)
+    named = [i for i, t in enumerate(texts) if want and want <= _words(t) and sims[i] >= NAME_FLOOR]
+    pool = named or [int(np.argmax(sims))]
+    best = max(pool, key=lambda i: (float(sims[i]), -i))
+    if not named and sims[best] < floor:
+        return None
+    return OpenMatch(labels[best], texts[best], round(float(sims[best]), 4))

@@ -1,0 +1,50 @@
+"""A scene's sky: an equirectangular image seen along every camera ray that no Gaussian covers.
+
+Convention (Blender's, z-up world, as `assets.sky`): the centre column looks along +x, u grows
+as the azimuth turns from +x towards -y, row 0 is straight up, the last row straight down.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .camera import Camera
+
+__all__ = ["check_sky", "sky_background", "sky_colors"]
+
+
+def check_sky(image: object) -> np.ndarray:
+    """The sky image as read-only float32 [H, W, 3] in [0, 1] (`ValueError` naming the problem)."""
+    a = np.asarray(image, dtype=np.float32)
+    if a.ndim != 3 or a.shape[2] != 3 or min(a.shape[:2]) < 2:
+        raise ValueError(f"Expected a sky image of shape (H, W, 3) with H, W >= 2, found {a.shape}")
+    if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
+        raise ValueError("Expected sky colours in [0, 1]")
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
+
+
+def sky_colors(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Bilinear sky colour along each world direction. [N, 3] -> float32 [N, 3]"""
+    d = np.asarray(directions, dtype=np.float64)
+    d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+    h, w = image.shape[:2]
+    u = (0.5 - np.arctan2(d[:, 1], d[:, 0]) / (2 * np.pi)) * w - 0.5
+    v = np.clip((0.5 - np.arcsin(np.clip(d[:, 2], -1, 1)) / np.pi) * h - 0.5, 0, h - 1)
+    u0, v0 = np.floor(u), np.floor(v)
+    fu, fv = (u - u0)[:, None], (v - v0)[:, None]
+    u0 = u0.astype(np.int64) % w
+    u1 = (u0 + 1) % w
+    v0 = v0.astype(np.int64)
+    v1 = np.minimum(v0 + 1, h - 1)
+    top = image[v0, u0] * (1 - fu) + image[v0, u1] * fu
+    bottom = image[v1, u0] * (1 - fu) + image[v1, u1] * fu
+    return (top * (1 - fv) + bottom * fv).astype(np.float32)
+
+
+def sky_background(image: np.ndarray, camera: Camera) -> np.ndarray:
+    """The sky behind every pixel of `camera`: float32 [H, W, 3]."""
+    points = camera.unproject(camera.pixel_centres(), np.ones((camera.height, camera.width)))
+    rays = (points - camera.position).reshape(-1, 3)
+    return sky_colors(image, rays).reshape(camera.height, camera.width, 3)

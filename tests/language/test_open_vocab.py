@@ -1,0 +1,57 @@
+"""Open vocabulary: basic shapes by name, real assets by embedding, nonsense gets candidates."""
+
+import pytest
+
+from morphosim_gym.errors import CommandError
+from morphosim_gym.generate.compose import compose_scene
+from morphosim_gym.generate.real_assets import asset_candidates
+from morphosim_gym.language import parse
+
+
+@pytest.fixture
+def real(monkeypatch):
+    monkeypatch.delenv("MORPHOSIM_ASSET_SOURCES", raising=False)
+    if not asset_candidates("chair"):
+        pytest.skip("needs the Sweet Home 3D furniture (apt install sweethome3d-furniture)")
+
+
+def test_shapes_always_resolve():
+    for shape in ("cylinder", "sphere", "torus", "capsule", "pyramid", "disc", "plank"):
+        plan = parse(f"a green {shape}")
+        if shape == "sphere":          # a vocabulary synonym of ball, which is a sphere
+            assert plan.objects[0].category == "ball"
+            continue
+        assert plan.objects[0].category == shape
+        scene = compose_scene(plan, 0).scene
+        assert scene.objects[1].category == shape and scene.objects[1].asset is None
+
+
+@pytest.mark.parametrize("text", ["a kangaroo", "a teapot", "a fire hydrant"])
+def test_open_nouns_give_a_scene(real, text):
+    plan = parse(text)
+    scene = compose_scene(plan, 0).scene
+    obj = scene.objects[1]
+    assert obj.name == plan.objects[0].name
+    if plan.objects[0].grounding == "open":
+        assert obj.asset is not None and obj.category.startswith("asset:")
+    assert scene.provenance.substitutions[0][0] == plan.objects[0].noun
+
+
+def test_teapot_is_a_teapot(real):
+    assert "teapot" in parse("a teapot").objects[0].category
+
+
+def test_nonsense_lists_candidates(real):
+    with pytest.raises(CommandError, match="florbnax.*Nearest shapes and assets: .+\\(0\\.\\d\\d\\)"):
+        parse("a florbnax")
+
+
+def test_name_match_beats_the_floor(real):
+    # "fan": the asset names hold the word, the embedding alone is below the floor
+    assert "fan" in parse("a fan").objects[0].category
+
+
+def test_noun_list_has_300():
+    from pathlib import Path
+    nouns = [n for n in (Path(__file__).parent / "nouns_300.txt").read_text().splitlines() if n and n[0] != "#"]
+    assert len(nouns) >= 300 and len(set(nouns)) == len(nouns)
