@@ -70,3 +70,41 @@ def test_sky_seen_in_a_novel_view_and_saved(real, tmp_path):
     np.testing.assert_allclose(out.rgb, sky_background(scene.sky, up), atol=0.05)
     save_scene(scene, tmp_path / "s.msim")
     np.testing.assert_array_equal(load_scene(tmp_path / "s.msim").sky, scene.sky)
+
+
+def test_envs_see_the_sky_and_the_vector_env_matches_single_envs(real):
+    """An outdoor real-asset scene's sky reaches every env camera ray: the top rows of the
+    observation are the panorama, not the flat background, and the batched vector env renders
+    them exactly as single envs do."""
+    import gymnasium as gym
+
+    import morphosim_gym.envs  # noqa: F401  (registers the ids)
+    from morphosim_gym.envs.native_vector import MorphoSimVectorEnv
+
+    from morphosim_gym.render import render
+
+    kw = dict(prompt="a red car drives from left to right", width=32, height=32)
+    env = gym.make("MorphoSim/Track-v0", **kw)
+    up = {"camera": {"look_at": [0.0, 30.0, 12.0]}}            # the tripod camera looks over the horizon
+    obs, _ = env.reset(seed=0, options=up)
+    u = env.unwrapped
+    scene = u.world.scene
+    assert scene.sky is not None
+    cam = u.rig.camera(u.task.default_cameras[0], 32, 32)
+    sources = u._sources(u.world.t)
+    with_sky = render(sources, cam, background=scene.background, sky=scene.sky).rgb_uint8()
+    flat = render(sources, cam, background=scene.background).rgb_uint8()
+    assert np.abs(with_sky.astype(int) - flat).max() > 10      # the view shows sky where nothing is drawn
+    np.testing.assert_array_equal(obs["rgb"], with_sky)
+    singles = []
+    for i in range(2):
+        e = gym.make("MorphoSim/Track-v0", **kw)
+        o, _ = e.reset(seed=5 + i, options=up)
+        singles.append(o["rgb"])
+        e.close()
+    venv = MorphoSimVectorEnv(2, "track", **kw)
+    vo, _ = venv.reset(seed=5, options=up)
+    for i in range(2):
+        np.testing.assert_array_equal(vo["rgb"][i], singles[i])
+    venv.close()
+    env.close()
