@@ -56,7 +56,8 @@ def test_huge_episode_counts_are_refused(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("text", ["a billion balls bounce", "two billion balls bounce", "a trillion cubes",
-                                  "countless balls bounce", "1e9 balls bounce", "a zillion mugs"])
+                                  "countless balls bounce", "1e9 balls bounce", "a zillion mugs",
+                                  "10^9 balls bounce", "10 ** 12 cubes"])
 def test_unbounded_counts_are_command_errors(text):
     with pytest.raises(CommandError, match="count must be"):
         ms.parse(text)
@@ -66,6 +67,7 @@ def test_ordinary_counts_still_parse():
     assert [o.count for o in ms.parse("three balls bounce").objects] == [3]
     assert [o.count for o in ms.parse("twenty balls bounce").objects] == [20]
     assert [o.count for o in ms.parse("balls bounce").objects] == [3]
+    assert [o.count for o in ms.parse("2^3 balls bounce").objects] == [8]     # a power is its value
 
 
 def test_format_bytes():

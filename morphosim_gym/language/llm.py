@@ -105,10 +105,9 @@ class LLMConfig:
     @classmethod
     def from_yaml(cls, path: str) -> "LLMConfig":
         """Read the ``llm:`` section (or the whole file) of a YAML config."""
-        import yaml
+        from ..config_yaml import load_yaml_file
 
-        with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f) or {}
+        data = load_yaml_file(path) or {}
         if not isinstance(data, dict):
             raise ValueError(f"Expected a mapping in {path}, found {type(data).__name__}")
         return cls.from_dict(data.get("llm", data))

@@ -102,12 +102,12 @@ def _env_sim(detail: float | None, reconstruction: str) -> Any:
 
 
 def _env_options(items: list[str]) -> dict:
-    import yaml
+    from ..config_yaml import load_yaml_text
 
     out = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip().isidentifier():
             raise ValueError(f"Expected --env-option KEY=VALUE, found {item!r}")
-        out[key.strip()] = yaml.safe_load(value)
+        out[key.strip()] = load_yaml_text(value, f"--env-option {key.strip()}")
     return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from typing import Any
@@ -52,9 +53,21 @@ _COMPOUND_RE = re.compile(r"\b(" + "|".join(re.escape(k) for k in sorted(COMPOUN
 _TOKEN_RE = re.compile(r"-?\d+(?:\.\d+)?|[a-z]+(?:'[a-z]+)?|[.,;!?:]")
 
 
+_POWER_RE = re.compile(r"(\d{1,6})\s*(?:\^|\*\*)\s*(\d{1,6})")
+
+
+def _power(m: re.Match) -> str:
+    """ "10^9" / "2**3" as the number it is when small ("8"), else as scientific notation ("1 e 9",
+    which the count check refuses); the token pattern has no "^", which would leave "10 9"."""
+    base, exp = int(m.group(1)), int(m.group(2))
+    if base <= 1 or exp * math.log10(base) < 7:
+        return str(base ** exp)
+    return f"1 e {int(exp * math.log10(base))}"
+
+
 def tokenize(text: str) -> list[str]:
     """Lower-cased word, number and punctuation tokens with the parser's normalisations."""
-    t = text.lower()
+    t = _POWER_RE.sub(_power, text.lower())
     t = (t.replace("\u2019", "'").replace("\u2018", "'").replace("\u201c", '"').replace("\u201d", '"')
          .replace("\u2014", " , ").replace("\u2013", " , ").replace("`", "'"))
     t = re.sub(r"(\d)\s*x\b", r"\1 times", t)
