@@ -18,7 +18,7 @@ from ..parallel import serialised
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
-from ..scene.sky import check_sky, sky_background
+from ..scene.sky import check_sky, composite_sky
 
 __all__ = ["RenderOutput", "render", "render_batch", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
@@ -228,12 +228,6 @@ def _source_parts(source: Source, t: float, background: Optional[Sequence[float]
     if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
     return gaussians, bg, sky
-
-def composite_sky(rgb: np.ndarray, alpha: np.ndarray, sky: np.ndarray, cams: Sequence[Camera]) -> np.ndarray:
-    """Renders on black [C, H, W, 3] with the sky behind what the Gaussians leave uncovered."""
-    behind = np.stack([sky_background(sky, c) for c in cams])
-    return (rgb + (1.0 - alpha[..., None]) * behind).astype(rgb.dtype)
-
 
 def cameras_to_arrays(cams: Sequence[Camera]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
     """viewmats [C, 4, 4], Ks [C, 3, 3], nears [C], width, height of cameras of one resolution."""

@@ -10,7 +10,10 @@ import numpy as np
 
 from .camera import Camera
 
-__all__ = ["check_sky", "sky_background", "sky_colors"]
+__all__ = ["check_sky", "sky_background", "sky_colors", "sky_rays", "composite_sky", "SKY_VISIBLE_BELOW"]
+
+#: Pixels with alpha at or above this show no sky: (1 - alpha) x 1 is under half a uint8 step there.
+SKY_VISIBLE_BELOW = 0.999
 
 
 def check_sky(image: object) -> np.ndarray:
@@ -27,11 +30,12 @@ def check_sky(image: object) -> np.ndarray:
 
 def sky_colors(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Bilinear sky colour along each world direction. [N, 3] -> float32 [N, 3]"""
-    d = np.asarray(directions, dtype=np.float64)
+    d = np.asarray(directions, dtype=np.float32)
     d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
     h, w = image.shape[:2]
-    u = (0.5 - np.arctan2(d[:, 1], d[:, 0]) / (2 * np.pi)) * w - 0.5
-    v = np.clip((0.5 - np.arcsin(np.clip(d[:, 2], -1, 1)) / np.pi) * h - 0.5, 0, h - 1)
+    u = (np.float32(0.5) - np.arctan2(d[:, 1], d[:, 0]) * np.float32(1 / (2 * np.pi))) * w - np.float32(0.5)
+    v = np.clip((np.float32(0.5) - np.arcsin(np.clip(d[:, 2], -1, 1)) * np.float32(1 / np.pi)) * h - np.float32(0.5),
+                0, h - 1)
     u0, v0 = np.floor(u), np.floor(v)
     fu, fv = (u - u0)[:, None], (v - v0)[:, None]
     u0 = u0.astype(np.int64) % w
@@ -43,8 +47,29 @@ def sky_colors(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
     return (top * (1 - fv) + bottom * fv).astype(np.float32)
 
 
+def sky_rays(camera: Camera, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """World directions (not normalised) of the rays through pixel centres (rows, cols). -> [N, 3]"""
+    K = camera.K
+    x = (cols.astype(np.float64) + 0.5 - K[0, 2]) / K[0, 0]
+    y = (rows.astype(np.float64) + 0.5 - K[1, 2]) / K[1, 1]
+    d = np.stack([x, y, np.ones_like(x)], axis=1)         # OpenCV camera frame
+    return d @ np.asarray(camera.world_to_camera)[:3, :3]  # R^T d for each ray
+
+
 def sky_background(image: np.ndarray, camera: Camera) -> np.ndarray:
     """The sky behind every pixel of `camera`: float32 [H, W, 3]."""
-    points = camera.unproject(camera.pixel_centres(), np.ones((camera.height, camera.width)))
-    rays = (points - camera.position).reshape(-1, 3)
-    return sky_colors(image, rays).reshape(camera.height, camera.width, 3)
+    rows, cols = np.indices((camera.height, camera.width)).reshape(2, -1)
+    return sky_colors(image, sky_rays(camera, rows, cols)).reshape(camera.height, camera.width, 3)
+
+
+def composite_sky(rgb: np.ndarray, alpha: np.ndarray, image: np.ndarray, cameras: list[Camera]) -> np.ndarray:
+    """Renders on black [C, H, W, 3] with the sky behind what the Gaussians leave uncovered (only
+    the pixels with alpha below `SKY_VISIBLE_BELOW` look the sky up: a ground-filled view costs
+    little)."""
+    out = np.array(rgb, dtype=np.float32, copy=True)
+    for c, camera in enumerate(cameras):
+        rows, cols = np.nonzero(alpha[c] < SKY_VISIBLE_BELOW)
+        if len(rows):
+            behind = sky_colors(image, sky_rays(camera, rows, cols))
+            out[c, rows, cols] += (1.0 - alpha[c, rows, cols, None]) * behind
+    return out.astype(rgb.dtype, copy=False)
