@@ -284,9 +284,9 @@ def bench_forward(scene: dict, res: int, frames: int, warmup: int = 5) -> dict:
     out = rasterize_numpy(*args, vm, K, res, res, object_ids=ids)
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    from morphosim_gym.render.cpu.pipeline import _workspace
+    from morphosim_gym.render.cpu.pipeline import thread_workspace
 
-    ws_mb = sum(b.nbytes for b in _workspace()._bufs.values()) / 2 ** 20
+    ws_mb = sum(b.nbytes for b in thread_workspace()._bufs.values()) / 2 ** 20
     return {"ms": med * 1e3, "fps": 1.0 / med, "fps_block_range": [1.0 / hi, 1.0 / lo], "frames": frames,
             "stages_ms": {k: v / nstage * 1e3 for k, v in timer.totals.items()},
             "alloc_peak_mb": peak / 2 ** 20, "workspace_mb": ws_mb, "other_load": load,

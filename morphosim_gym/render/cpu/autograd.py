@@ -18,7 +18,7 @@ import numpy as np
 import torch
 
 from .backward import NGRAD, raster_backward, reduce_entries
-from .pipeline import _workspace, render_camera
+from .pipeline import render_camera, thread_workspace
 from .projection import project_backward
 
 __all__ = ["rasterize_cpu"]
@@ -45,7 +45,7 @@ class _RasterizeCPU(torch.autograd.Function):
         inst = np.empty((C, height, width), np.int32)
         fout = np.empty((C, height, width, D), npdt)
         save = any(ctx.needs_input_grad[:6])   # no input needs a gradient: forward only, reuse scratch
-        ws = None if save else _workspace()
+        ws = None if save else thread_workspace()
         states = []
         for ci in range(C):
             states.append(render_camera(m, q, s, o, c, f, ids, viewmats[ci], Ks[ci], float(nears[ci]), width, height,

@@ -23,7 +23,6 @@ own output block.
 
 from __future__ import annotations
 
-import threading
 from typing import Optional, Sequence
 
 import numba
@@ -34,7 +33,7 @@ from ._jit import NREC, jit, pjit
 from .binning import _fill_range, plan_tiles
 from .cull import cull_view
 from .forward import _raster_tiles
-from .pipeline import Workspace
+from .pipeline import thread_workspace
 from .projection import _project_range
 
 __all__ = ["rasterize_batch_numpy", "BatchView", "batch_view"]
@@ -196,16 +195,6 @@ def _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cul
     return out
 
 
-_LOCAL = threading.local()
-
-
-def _workspace() -> Workspace:
-    ws = getattr(_LOCAL, "ws", None)
-    if ws is None:
-        ws = _LOCAL.ws = Workspace()
-    return ws
-
-
 def _concat(views: Sequence[BatchView], name: str, width: int, dtype) -> np.ndarray:
     parts = [x for v in views for x in getattr(v, name)]
     if not parts:
@@ -263,7 +252,7 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     nears = np.array([v.near for v in views], f32)
     bgs = np.ascontiguousarray(np.stack([v.background for v in views]), f32)
 
-    ws = _workspace()
+    ws = thread_workspace("batch")
     kept = _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cull)
     items, item_start = _work_items(goff, nthr, kept)
     max_tiles = max(int(ntiles.max()), 1)

@@ -75,10 +75,15 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def _workspace() -> Workspace:
-    ws = getattr(_LOCAL, "ws", None)
+def thread_workspace(name: str = "single") -> Workspace:
+    """This thread's `Workspace` called `name` (the single-camera and batched paths keep their own, so
+    a batch's outputs, views into its buffers, survive single renders in between)."""
+    spaces = getattr(_LOCAL, "spaces", None)
+    if spaces is None:
+        spaces = _LOCAL.spaces = {}
+    ws = spaces.get(name)
     if ws is None:
-        ws = _LOCAL.ws = Workspace()
+        ws = spaces[name] = Workspace()
     return ws
 
 
@@ -231,7 +236,7 @@ def rasterize_numpy(means,        # [N, 3]
     alpha = np.empty((C, height, width), np.float32)
     inst = np.empty((C, height, width), np.int32)
     fout = np.empty((C, height, width, D), np.float32)
-    ws = _workspace()
+    ws = thread_workspace()
     for c in range(C):
         render_camera(means, quats, scales, opacities, colors, feat, ids, viewmats[c], Ks[c], float(near[c]),
                       width, height, bg, rgb[c], depth[c], alpha[c], inst[c], fout[c], timer=timer, ws=ws)
