@@ -1,6 +1,9 @@
 """Shared fixtures: small deterministic scenes built directly from the scene types."""
 
+import atexit
 import os
+import shutil
+import tempfile
 
 import numpy as np
 import pytest
@@ -11,6 +14,13 @@ from morphosim_gym.scene.rotations import axis_angle_to_quat
 # The suite's expectations encode the procedural generator; tests of real assets opt in
 # (monkeypatch MORPHOSIM_ASSET_SOURCES, see tests/generate/test_real_assets.py).
 os.environ.setdefault("MORPHOSIM_ASSET_SOURCES", "")
+
+# Caches of one run, never the machine's ~/.cache: what an earlier run (or a killed one) left there must
+# not change a result. The xdist workers inherit the folder from the controller, so they share it.
+if "PYTEST_XDIST_WORKER" not in os.environ:
+    _CACHE = tempfile.mkdtemp(prefix="morphosim-test-cache-")
+    os.environ["MORPHOSIM_CACHE"] = _CACHE
+    atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)
 
 
 def make_tiny_scene(n_per_object: int = 200, frames: int = 9, fps: float = 4.0, seed: int = 0,

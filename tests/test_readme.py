@@ -13,11 +13,14 @@ with its reason. Anything not listed runs in the default suite, so a new block i
 from __future__ import annotations
 
 import os
+import queue
 import re
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
+import threading
 import time
 import urllib.request
 from dataclasses import dataclass
@@ -210,22 +213,64 @@ BASH_PRELUDE = ('set -eo pipefail\n'
                 'morphosim() { "$MORPHOSIM_PY" -m morphosim_gym.cli "$@"; }\n')
 
 
+def _stop_group(proc: subprocess.Popen) -> None:
+    """End the command's whole process group (servers, Ray and pool workers it may have left)."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    try:
+        proc.wait(20)
+    except subprocess.TimeoutExpired:
+        pass
+
+
 def _run(argv: list[str], cwd: Path, timeout: float) -> None:
-    proc = subprocess.run(argv, cwd=cwd, env=_env(), capture_output=True, text=True, timeout=timeout, check=False)
-    assert proc.returncode == 0, f"exit {proc.returncode}\n--- stdout\n{proc.stdout[-4000:]}\n--- stderr\n" \
-                                 f"{proc.stderr[-4000:]}"
+    """Run `argv` in its own session with its output in files, so a child that outlives it (and keeps
+    a pipe open) cannot stall the test; the whole group is ended afterwards."""
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(argv, cwd=cwd, env=_env(), stdin=subprocess.DEVNULL, stdout=out, stderr=err,
+                                text=True, start_new_session=True)
+        try:
+            code = proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            code = None
+        finally:
+            _stop_group(proc)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read(), err.read()
+    assert code is not None, f"still running after {timeout:.0f} s\n--- stdout\n{stdout[-4000:]}\n--- stderr\n" \
+                             f"{stderr[-4000:]}"
+    assert code == 0, f"exit {code}\n--- stdout\n{stdout[-4000:]}\n--- stderr\n{stderr[-4000:]}"
+
+
+def _lines_of(stream) -> queue.Queue:
+    """The lines of `stream`, read on a daemon thread (None at the end), so a silent server cannot block."""
+    lines: queue.Queue = queue.Queue()
+
+    def pump() -> None:
+        for line in iter(stream.readline, ""):
+            lines.put(line)
+        lines.put(None)
+
+    threading.Thread(target=pump, daemon=True).start()
+    return lines
 
 
 def _serve(script: str, cwd: Path, timeout: float) -> None:
     """Run a server command until it prints ' at http://...', fetch that page, then stop its process group."""
-    proc = subprocess.Popen(["bash", "-c", script], cwd=cwd, env=_env(), stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    proc = subprocess.Popen(["bash", "-c", script], cwd=cwd, env=_env(), stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
     lines: list[str] = []
     try:
-        url, start = None, time.monotonic()
-        while url is None and time.monotonic() - start < timeout:
-            line = proc.stdout.readline()
-            if not line:
+        pending, url, deadline = _lines_of(proc.stdout), None, time.monotonic() + timeout
+        while url is None and time.monotonic() < deadline:
+            try:
+                line = pending.get(timeout=max(0.1, deadline - time.monotonic()))
+            except queue.Empty:
+                break
+            if line is None:
                 break
             lines.append(line)
             found = re.search(r" at (http://\S+)", line)
@@ -239,8 +284,8 @@ def _serve(script: str, cwd: Path, timeout: float) -> None:
             try:
                 proc.wait(20)
             except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(20)
+                pass
+        _stop_group(proc)
         proc.stdout.close()
 
 
@@ -254,7 +299,7 @@ def test_readme_block_runs_as_written(case: Case, tmp_path):
         assert yaml.safe_load(case.command) is not None
         return
     cwd = _workdir(tmp_path)
-    timeout = 300 if case.kind == "run" else 1800
+    timeout = 300 if case.kind == "run" else 600
     if case.lang == "python":
         (cwd / "readme_block.py").write_text(case.command)
         _run([sys.executable, "readme_block.py"], cwd, timeout)

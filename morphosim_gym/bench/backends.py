@@ -89,7 +89,8 @@ def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Op
     ray = _ray()
     started = False
     if not ray.is_initialized():
-        kw: dict[str, Any] = {"address": address} if address else {"num_cpus": max(workers, 1)}
+        # "local": our own cluster, even where RAY_ADDRESS or a stale `ray start` file names another.
+        kw: dict[str, Any] = {"address": address} if address else {"address": "local", "num_cpus": max(workers, 1)}
         ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False, **kw)
         started = True
     try:
