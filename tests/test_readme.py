@@ -13,20 +13,19 @@ with its reason. Anything not listed runs in the default suite, so a new block i
 from __future__ import annotations
 
 import os
-import queue
 import re
 import signal
 import subprocess
 import sys
 import tempfile
 import textwrap
-import threading
-import time
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
+from tests.processes import wait_for_line
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -245,36 +244,13 @@ def _run(argv: list[str], cwd: Path, timeout: float) -> None:
     assert code == 0, f"exit {code}\n--- stdout\n{stdout[-4000:]}\n--- stderr\n{stderr[-4000:]}"
 
 
-def _lines_of(stream) -> queue.Queue:
-    """The lines of `stream`, read on a daemon thread (None at the end), so a silent server cannot block."""
-    lines: queue.Queue = queue.Queue()
-
-    def pump() -> None:
-        for line in iter(stream.readline, ""):
-            lines.put(line)
-        lines.put(None)
-
-    threading.Thread(target=pump, daemon=True).start()
-    return lines
-
-
 def _serve(script: str, cwd: Path, timeout: float) -> None:
     """Run a server command until it prints ' at http://...', fetch that page, then stop its process group."""
     proc = subprocess.Popen(["bash", "-c", script], cwd=cwd, env=_env(), stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    lines: list[str] = []
     try:
-        pending, url, deadline = _lines_of(proc.stdout), None, time.monotonic() + timeout
-        while url is None and time.monotonic() < deadline:
-            try:
-                line = pending.get(timeout=max(0.1, deadline - time.monotonic()))
-            except queue.Empty:
-                break
-            if line is None:
-                break
-            lines.append(line)
-            found = re.search(r" at (http://\S+)", line)
-            url = found.group(1) if found else None
+        found, lines = wait_for_line(proc, r" at (http://\S+)", timeout)
+        url = found.group(1) if found else None
         assert url, f"no address printed (exit {proc.poll()}):\n{''.join(lines)[-4000:]}"
         page = urllib.request.urlopen(url, timeout=30).read().decode(errors="replace")
         assert "<html" in page.lower(), page[:500]

@@ -136,10 +136,11 @@ def test_hostile_replies_fall_back_to_the_rules(name):
     start = time.perf_counter()
     try:
         plan = parse_llm(TEXT, config=_config(server))
+        elapsed = time.perf_counter() - start      # the client's time; closing our server is not part of it
     finally:
         server.close()
     assert plan.backend == "rules" and plan == parse_rules(TEXT)
-    assert time.perf_counter() - start < 3.0       # no reply costs more than reading it once
+    assert elapsed < 3.0                           # no reply costs more than reading it once
 
 
 @pytest.mark.parametrize("name", sorted(HOSTILE))
@@ -176,9 +177,10 @@ def test_a_50_mb_reply_is_refused_quickly(announce):
     try:
         with pytest.raises(BackendUnavailableError, match="bytes"):
             parse_llm(TEXT, config=_config(server, fallback="raise"))
+        elapsed = time.perf_counter() - start      # before our flooding server is stopped (up to 5 s)
     finally:
         server.close()
-    assert time.perf_counter() - start < 2.0
+    assert elapsed < 2.0
 
 
 def test_the_deadline_covers_every_retry():
@@ -192,9 +194,10 @@ def test_the_deadline_covers_every_retry():
     try:
         with pytest.raises(BackendUnavailableError, match="within 1 s"):
             parse_llm(TEXT, config=_config(server, timeout_s=1, max_retries=2, fallback="raise"))
+        elapsed = time.perf_counter() - start
     finally:
         server.close()
-    assert time.perf_counter() - start < 1.5 and len(server.request_sizes) == 2
+    assert elapsed < 1.5 and len(server.request_sizes) == 2
 
 
 def test_a_long_invalid_reply_is_not_sent_back():

@@ -4,7 +4,6 @@ Enter; recording) and the `morphosim view` command line."""
 import os
 import subprocess
 import sys
-import time
 import urllib.request
 
 import numpy as np
@@ -13,6 +12,8 @@ import pytest
 import morphosim_gym as ms
 from morphosim_gym.errors import BackendUnavailableError
 from morphosim_gym.viewer import ViewerSession
+
+from tests.processes import wait_for_line
 
 from .conftest import BUS
 
@@ -124,23 +125,21 @@ def test_cli_serves_a_scene_file(tmp_path, ball_scene):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen([sys.executable, "-m", "morphosim_gym.cli", "view", str(tmp_path), "--port", "0",
                              "--quiet", "--record-dir", str(tmp_path / "rec")],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
     try:
-        url, lines, start = None, [], time.time()
-        while url is None and time.time() - start < 90:
-            line = proc.stdout.readline()
-            if not line:
-                break
-            lines.append(line)
-            if " at http://" in line:
-                url = line.split(" at ")[1].split()[0]
-        assert url, "".join(lines)
+        found, lines = wait_for_line(proc, r" at (http://\S+)", 300)
+        assert found, "".join(lines)
+        url = found.group(1)
         assert "ground, ball" in lines[-1]
         page = urllib.request.urlopen(url, timeout=10).read().decode()
         assert "<html" in page.lower()
     finally:
         proc.terminate()
-        proc.wait(10)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
 
 
 class _PageCamera:
