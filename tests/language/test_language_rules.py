@@ -234,3 +234,10 @@ def test_vocabulary_categories_all_parse():
         assert plan.objects[0].category == name, name
         if cat.plural != name:
             assert ms.parse(f"two {cat.plural} move to the left").objects[0].count == 2
+
+
+@pytest.mark.parametrize("text, keep", [("delete everything except the bus", "bus"),
+                                        ("remove everything but the red car", "red car")])
+def test_delete_everything_except_points_to_extract(text, keep):
+    with pytest.raises(ms.CommandError, match=f"say 'extract the {keep}'"):
+        ms.parse(text)
