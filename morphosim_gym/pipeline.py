@@ -145,8 +145,16 @@ class MorphoSim:
                 self._generator.compose(plan, seed, prompt).scene
         else:
             scene = self.reconstruct(self.generate_clip(prompt, seed))
-        for follow in plan.then:
-            scene = self.edit(scene, follow.text)
+        return self.apply_follow_ups(scene, plan)
+
+    def apply_follow_ups(self, scene: Scene4D, plan: Any) -> Scene4D:
+        """Apply a generate plan's follow-up edits to its generated scene, in order. Follow-ups that
+        continue a motion ("then stops") are second stages the generator already played, not edits
+        (see `morphosim_gym.language.sequence`)."""
+        from .language.sequence import follow_up_edits
+
+        for text in follow_up_edits(plan):
+            scene = self.edit(scene, text)
         return scene
 
     # --------------------------------------------------------------- edits

@@ -77,9 +77,7 @@ def _generate(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)
-    scene = sim.reconstruct(clip)
-    for follow in plan.then:
-        scene = sim.edit(scene, follow.text)
+    scene = sim.apply_follow_ups(sim.reconstruct(clip), plan)
     seconds = time.perf_counter() - start
     with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
         stage = Path(tmp)
