@@ -25,6 +25,7 @@ import numpy as np
 
 from ..limits import check_clip_size
 from ..language.sequence import motion_stages
+from ..language.substitutions import plan_substitutions
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
@@ -500,8 +501,7 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
     motion = Motion.rigid(np.concatenate(parts["nodes"]), rotations, translations,
                           node_objects=np.arange(1, len(instances) + 1))
     text = prompt if prompt is not None else getattr(plan, "text", None)
-    subs = tuple((o.noun, o.category, o.similarity) for o in plan.objects
-                 if getattr(o, "grounding", None) in ("embedding", "open"))
+    subs = tuple(sub.as_triple() for sub in plan_substitutions(plan))
     return Scene4D(g, motion, objects, config.fps, cameras,
                    provenance=Provenance(text, int(seed), "procedural", "none", substitutions=subs),
                    background=setting.background)
