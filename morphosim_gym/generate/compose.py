@@ -37,7 +37,7 @@ from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, set
 from .color_match import match_mean_color, tint_keep_shading
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
-from .stages import fall, is_fall, second_stage
+from .stages import fall, fall_drop, is_fall, second_stage
 
 __all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
 
@@ -273,8 +273,7 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
             heights[inst.name] = levels["water_level"] - 0.12 * inst.half[2] * 2   # a shallow draft
         else:
             heights[inst.name] = 0.0
-    lift = {i.name: (bounce_height(i.half) if motions.get(i.spec.name) is not None
-                     and motions[i.spec.name].path == "bounce" else 0.0) for i in instances}
+    lift = {i.name: _lift_of(motions.get(i.spec.name), i) for i in instances}
     focus_z = float(np.mean([heights[i.name] + i.half[2] + lift[i.name] / 2 for i in key])) if key else 0.5
     tall = max((2 * float(i.half[2]) + lift[i.name] for i in key), default=size)
     fy_over_h = 0.5 / math.tan(math.radians(config.fov_y_deg) / 2)
@@ -416,12 +415,20 @@ def _request(m: Any, inst: Instance, by_spec: dict, top_of: dict) -> MotionReque
     return MotionRequest(path, direction, m.speed, start=pos(m.start))
 
 
+def _lift_of(m: Any, inst: Instance) -> float:
+    """How far above its rest height an object's motion takes it (a bounce, a fall's start): framed by the camera."""
+    if m is None:
+        return 0.0
+    if m.path == "bounce":
+        return bounce_height(inst.half)
+    return fall_drop(inst.half) if is_fall(m.direction_world, m.path, inst.mobility) else 0.0
+
+
 def _staged(traj: PlannedTrajectory, m: Any, inst: Instance, stage: Any, cameras: list[Camera],
             vertical: bool) -> PlannedTrajectory:
     """A planned trajectory as a fall under gravity when it is one, then with its second stage if any."""
     if is_fall(m.direction_world, m.path, inst.mobility):
-        drop = max(float(traj.positions[0, 2] - traj.positions[-1, 2]), 3.0 * float(inst.half[2]))
-        traj = fall(traj, float(inst.position[2]), drop, cameras, inst.half)
+        traj = fall(traj, float(inst.position[2]), fall_drop(inst.half), cameras, inst.half)
     if stage is not None:
         d = m.direction_world
         upright = vertical or (d is not None and abs(float(d[2])) > 0.7 and not is_fall(d, m.path, inst.mobility))

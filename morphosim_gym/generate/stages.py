@@ -3,9 +3,10 @@
 - `fall`: a straight downward motion of something that neither flies nor swims is a fall: it starts
   `drop` metres above its rest height and accelerates (constant acceleration, landing at 60 % of the
   clip) until it rests on the surface under it, where it stays: it never sinks into it.
-- `second_stage`: "the ball rolls left then stops / reverses / speeds up": the planned motion plays
-  for the first half of the clip, then the clip continues from there with the second stage (held
-  still, played backwards, or played `factor` times faster).
+- `second_stage`: "the ball rolls left then stops / reverses / speeds up". Stop and reverse: the
+  whole planned path plays over the first half of the clip (twice the planned pace, so that the
+  first stage is seen in full), then the object stays where it arrived, or goes back along it. Speed:
+  the first half of the path at the planned pace, then `factor` times faster.
 
 Both return a new `PlannedTrajectory` whose key points, boxes and velocities are projected again
 from the new world positions (lambdas, the planner's spacing factors, are kept).
@@ -22,15 +23,21 @@ import numpy as np
 from ..scene import Camera
 from .trajectory import PlannedTrajectory, _project_boxes
 
-__all__ = ["FALL_LANDING", "is_fall", "fall", "second_stage"]
+__all__ = ["FALL_HEIGHTS", "FALL_LANDING", "fall_drop", "is_fall", "fall", "second_stage"]
 
 FALL_LANDING = 0.6          # fraction of the clip at which a fall reaches the surface
+FALL_HEIGHTS = 1.0          # a fall starts this many object heights above the surface
 
 
 def is_fall(direction: Sequence[float] | None, path: str, mobility: str) -> bool:
     """A straight motion straight down of an object that rests on a surface."""
     return (path == "straight" and direction is not None and float(direction[2]) < -0.95
             and mobility not in ("air", "swim", "float"))
+
+
+def fall_drop(half: Sequence[float]) -> float:
+    """How high above its rest height a fall starts, metres (`FALL_HEIGHTS` object heights)."""
+    return FALL_HEIGHTS * 2.0 * float(half[2])
 
 
 def _reproject(traj: PlannedTrajectory, pos: np.ndarray, headings: np.ndarray, spins: np.ndarray,
@@ -60,10 +67,10 @@ def _frame_map(op: Any, T: int) -> np.ndarray:
     mid = (T - 1) / 2.0
     i = np.arange(T, dtype=np.float64)
     after = i > mid
-    if op.op == "stop":
-        return np.where(after, mid, i)
-    if op.op == "reverse":
-        return np.where(after, np.maximum(2 * mid - i, 0.0), i)
+    if op.op == "stop":               # the whole planned path over the first half, then still
+        return np.minimum(2 * i, T - 1.0)
+    if op.op == "reverse":            # the whole path out over the first half, back over the second
+        return np.where(after, np.maximum(2 * (T - 1 - i), 0.0), 2 * i)
     if op.op == "speed":
         factor = float(op.factor if op.factor is not None else op.speed)
         return np.where(after, np.minimum(mid + (i - mid) * factor, T - 1.0), i)
