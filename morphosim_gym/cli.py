@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
@@ -95,6 +96,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `morphosim` script."""
     argv = list(sys.argv[1:] if argv is None else argv)
     command = _command_of(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _note_printer(command)
+        return _run(argv, command)
+
+
+def _note_printer(command: str | None) -> Callable[..., None]:
+    """`warnings.showwarning` for the CLI: a substitution (`SubstitutionWarning`) is one line on stderr,
+    "morphosim CMD: note: noun 'kangaroo' is not in the library: using duck (similarity 0.59)", each
+    once; other warnings print as Python prints them."""
+    shown: set[str] = set()
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+        if category.__name__ != "SubstitutionWarning":
+            default(message, category, filename, lineno, file, line)
+            return
+        if str(message) not in shown:
+            shown.add(str(message))
+            print(f"morphosim {command}: note: {message}" if command else f"morphosim: note: {message}",
+                  file=sys.stderr)
+    return show
+
+
+def _run(argv: list[str], command: str | None) -> int:
     try:
         parser = build_parser([command] if command else [])
         args = parser.parse_args(argv)

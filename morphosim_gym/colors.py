@@ -1,4 +1,4 @@
-"""Colour names to RGB: the 148 CSS colour names, a few common extras, and modifiers.
+"""Colour names to RGB: what people mean by the common names, the 148 CSS names, extras, modifiers.
 
 A colour phrase is an optional modifier followed by a base name:
 
@@ -6,6 +6,11 @@ A colour phrase is an optional modifier followed by a base name:
   written as one word or as separate words ("light blue" == "lightblue", "dark olive green" ==
   "darkolivegreen"), plus the extras in `EXTRA_COLORS` ("golden", "cream", "burgundy"...).
   A multi-word CSS name wins over modifier + base: "light blue" is CSS lightblue.
+- common names mean what people mean: `COMMON_COLORS` overrides the CSS value of the everyday names
+  whose CSS value people see as another colour (CSS brown a52a2a reads as dark red, CSS purple as
+  magenta, CSS green as dark green, CSS beige and khaki as off-white). The CSS value stays available
+  when asked for exactly: ``css:<name>`` ("a css:brown dog", "make it css:dark olive green") is the
+  CSS Color Module value, whatever the table says.
 - modifiers (applied to the base RGB, deterministic, results stay in [0, 1]):
   ``light``  mixes 50 % with white, ``pale`` mixes 70 % with white, ``dark`` multiplies by 0.55,
   ``bright`` scales so that the largest channel is 1 (full value; black becomes 0.25 grey). Synonyms: deep -> dark, pastel -> pale, vivid -> bright.
@@ -17,7 +22,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-__all__ = ["CSS_COLORS", "EXTRA_COLORS", "COLOR_MODIFIERS", "MODIFIER_SYNONYMS", "color_rgb",
+__all__ = ["CSS_COLORS", "CSS_PREFIX", "COMMON_COLORS", "EXTRA_COLORS", "COLOR_MODIFIERS", "MODIFIER_SYNONYMS", "color_rgb",
            "apply_modifier", "match_color", "is_color_word", "known_color_names"]
 
 # CSS named colours (CSS Color Module Level 4), as hex.
@@ -66,10 +71,20 @@ golden ffd700 bronze cd7f32 copper b87333 cream fffdd0 burgundy 800020 mustard f
 emerald 50c878 scarlet ff2400 amber ffbf00 ruby e0115f mauve e0b0ff
 """)
 
+# Everyday names as people picture them (sRGB; each replaces the CSS value of the bare name, the CSS
+# value stays reachable as "css:<name>"). Names whose CSS value already reads right (red, blue,
+# yellow, orange-ish tan, navy, maroon, olive, grey, silver, pink-ish...) are listed when their CSS
+# value is off: brown, beige, khaki, purple, violet, green, orange, pink, gold.
+COMMON_COLORS: dict[str, tuple[float, float, float]] = _hex_table("""
+brown 8b5a2b beige e1c699 khaki c3b091 purple 7f3fbf violet 7f00ff green 22a033 orange ff8c1a pink ff99bb
+gold d4af37 golden d4af37
+""")
+CSS_PREFIX = "css:"
+
 COLOR_MODIFIERS: tuple[str, ...] = ("light", "dark", "pale", "bright")
 MODIFIER_SYNONYMS: dict[str, str] = {"deep": "dark", "pastel": "pale", "vivid": "bright"}
 
-_ALL = {**CSS_COLORS, **EXTRA_COLORS}
+_ALL = {**CSS_COLORS, **EXTRA_COLORS, **COMMON_COLORS}
 # Multi-word spellings of CSS names, keyed by their words ("light", "blue") -> "lightblue".
 _LONGEST_NAME_WORDS = 4
 _BASIC = {"red", "green", "blue", "yellow", "orange", "purple", "pink", "brown", "gray", "grey", "white", "black"}
@@ -80,9 +95,16 @@ def known_color_names() -> list[str]:
     return sorted(_ALL)
 
 
+def _css_name(word: str) -> str | None:
+    """The CSS name of a "css:<name>" word ("css:brown" -> "brown"), else None."""
+    if word.startswith(CSS_PREFIX) and word[len(CSS_PREFIX):].replace(" ", "") in CSS_COLORS:
+        return word[len(CSS_PREFIX):].replace(" ", "")
+    return None
+
+
 def is_color_word(word: str) -> bool:
-    """Whether `word` alone names a base colour."""
-    return word in _ALL
+    """Whether `word` alone names a base colour ("brown", "css:brown")."""
+    return word in _ALL or _css_name(word) is not None
 
 
 def apply_modifier(rgb: Sequence[float], modifier: str) -> tuple[float, float, float]:
@@ -113,6 +135,9 @@ def color_rgb(name: str) -> tuple[float, float, float]:
         ValueError: the name is not a known colour phrase.
     """
     name = " ".join(name.lower().split())
+    css = _css_name(name.replace(": ", ":"))
+    if css is not None:
+        return CSS_COLORS[css]
     if name.replace(" ", "") in _ALL:
         return _ALL[name.replace(" ", "")]
     parts = name.split(" ", 1)
@@ -122,7 +147,7 @@ def color_rgb(name: str) -> tuple[float, float, float]:
         if mod in COLOR_MODIFIERS and base in _ALL:
             return apply_modifier(_ALL[base], mod)
     raise ValueError(f"Expected a colour name (a CSS colour such as 'red' or 'lightblue', optionally after "
-                     f"light/dark/pale/bright), found {name!r}")
+                     f"light/dark/pale/bright, or 'css:<name>' for the exact CSS value), found {name!r}")
 
 
 def match_color(words: Sequence[str], start: int = 0) -> tuple[str, tuple[float, float, float], int] | None:
@@ -133,6 +158,9 @@ def match_color(words: Sequence[str], start: int = 0) -> tuple[str, tuple[float,
     one- or multi-word base ("pale sky blue" -> "pale skyblue").
     """
     n = len(words)
+    css = _css_name(words[start]) if start < n else None
+    if css is not None:
+        return CSS_PREFIX + css, CSS_COLORS[css], 1
     for k in range(min(_LONGEST_NAME_WORDS, n - start), 0, -1):
         joined = "".join(words[start:start + k])
         if joined in _ALL:

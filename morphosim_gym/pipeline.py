@@ -47,6 +47,10 @@ class SimConfig:
         cache: cache on disk by content hash: generated clips, and with `reconstruction="oracle"`
             the composed scenes `generate` returns (`.msim` files under `cache_dir/scene/`).
         cache_dir: where; None = `default_cache_dir()`.
+        strict: every parse of the pipeline (generate, generate_clip, env scenes) raises `CommandError`
+            instead of substituting ("kangaroo" -> duck, see `morphosim_gym.language.substitutions`);
+            off (default), each substitution is a `SubstitutionWarning` and is recorded in the
+            scene's provenance.
     """
 
     generator: str = "procedural"
@@ -56,6 +60,7 @@ class SimConfig:
     render_backend: str = "cpu"
     cache: bool = False
     cache_dir: Optional[str] = None
+    strict: bool = False
 
     def __post_init__(self) -> None:
         if self.generator != "procedural":
@@ -89,10 +94,14 @@ class MorphoSim:
 
     # -------------------------------------------------------------- parsing
     def parse(self, text: str, scene: Scene4D | None = None) -> Any:
-        """The plan of a command (see `morphosim_gym.parse`)."""
+        """The plan of a command (see `morphosim_gym.parse`); with `strict` a substitution is a
+        `CommandError`, else a `SubstitutionWarning`."""
         from .language import parse
+        from .language.substitutions import warn
 
-        return parse(text, scene=scene)
+        plan = parse(text, scene=scene, strict=self.config.strict)
+        warn(plan)
+        return plan
 
     # ----------------------------------------------------------- generation
     def generate_clip(self, prompt: str, seed: int = 0) -> GeneratedClip:
@@ -145,8 +154,16 @@ class MorphoSim:
                 self._generator.compose(plan, seed, prompt).scene
         else:
             scene = self.reconstruct(self.generate_clip(prompt, seed))
-        for follow in plan.then:
-            scene = self.edit(scene, follow.text)
+        return self.apply_follow_ups(scene, plan)
+
+    def apply_follow_ups(self, scene: Scene4D, plan: Any) -> Scene4D:
+        """Apply a generate plan's follow-up edits to its generated scene, in order. Follow-ups that
+        continue a motion ("then stops") are second stages the generator already played, not edits
+        (see `morphosim_gym.language.sequence`)."""
+        from .language.sequence import follow_up_edits
+
+        for text in follow_up_edits(plan):
+            scene = self.edit(scene, text)
         return scene
 
     # --------------------------------------------------------------- edits

@@ -38,8 +38,12 @@ def a_or_an(text: str) -> str:
 
 
 def describe_object(obj: "SceneObject") -> str:
-    """Words for an object in an instruction: its asked colour (nearest basic name) and its noun."""
+    """Words for an object in an instruction: its asked colour (nearest basic name) and what it is: the
+    noun as written when the library knows it ("sedan", a car), else the category it was grounded to
+    (a "kangaroo" generated as a duck is "the duck": the instruction names what is in the scene)."""
     noun = obj.category if obj.name.rsplit("_", 1)[-1].isdigit() else obj.name
+    if noun == obj.name and _substituted(obj):
+        noun = obj.category
     if obj.color is None:
         return noun
     from morphosim_gym.colors import color_rgb
@@ -47,6 +51,15 @@ def describe_object(obj: "SceneObject") -> str:
     rgb = np.asarray(obj.color)
     best = min(_BASIC_COLORS, key=lambda c: float(np.sum((np.asarray(color_rgb(c)) - rgb) ** 2)))
     return f"{best} {noun}"
+
+
+def _substituted(obj: "SceneObject") -> bool:
+    """Whether the object's name is a word outside the library that was grounded to another category."""
+    from morphosim_gym.language.open_vocab import is_open_category
+    from morphosim_gym.language.vocabulary import noun_to_category
+
+    return (obj.name != obj.category and not is_open_category(obj.category)
+            and noun_to_category(obj.name.replace(" ", "")) is None and noun_to_category(obj.name) is None)
 
 
 def check_camera_override(camera: Any) -> dict:

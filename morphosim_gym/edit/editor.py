@@ -129,10 +129,23 @@ def _redirect(scene: Scene4D, op: RedirectOp, sel: Selection) -> Scene4D:
         direction = tuple(d / np.linalg.norm(d))
     if direction is None:
         raise EditError("Expected a new direction or a landmark for the redirect, found neither")
+    if op.factor is None and op.speed is None:
+        _refuse_same_direction(scene, ids, direction)
     out = ops.redirect(scene, ids, direction)
     if op.factor is not None or op.speed is not None:
         out = ops.change_speed(out, ids, float(op.factor if op.factor is not None else op.speed))
     return out
+
+
+def _refuse_same_direction(scene: Scene4D, ids: list[int], direction: Any) -> None:
+    """A redirect to where the objects already go would change nothing: an `EditError` saying so."""
+    heading = ops.main_direction(scene, ids)
+    want = np.asarray(direction, dtype=np.float64)
+    if heading is not None and float(heading @ want) / float(np.linalg.norm(want)) > 0.97:
+        names = [o.name for o in scene.objects if o.id in set(ids)]
+        raise EditError(f"Nothing to change: {', '.join(names)} already moves that way "
+                        f"(direction {tuple(round(float(c), 2) + 0.0 for c in heading)}); to change how fast, say e.g. "
+                        f"'make the {names[0]} faster'")
 
 
 def _camera(scene: Scene4D, op: CameraOp, sel: None) -> Scene4D:

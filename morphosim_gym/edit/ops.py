@@ -27,7 +27,7 @@ from ..scene import Motion, Scene4D
 from ..scene.rotations import axis_angle_to_quat, matrix_to_quat, quat_to_matrix
 
 __all__ = ["recolor", "remove", "extract", "reverse", "redirect", "change_speed", "stop", "object_nodes",
-           "ensure_nodes"]
+           "ensure_nodes", "main_direction"]
 
 
 def _luminance(c: np.ndarray) -> np.ndarray:
@@ -174,6 +174,17 @@ def _object_track(scene: Scene4D, object_ids: Sequence[int]) -> np.ndarray:
     R = quat_to_matrix(m.rotations)                                          # [T, K, 3, 3]
     moving = np.einsum("tkij,kj->ti", R, a) + np.einsum("k,tki->ti", b, m.translations)
     return (moving + still) / max(int(sel.sum()), 1)
+
+
+def main_direction(scene: Scene4D, object_ids: Sequence[int]) -> np.ndarray | None:
+    """Unit world direction from the selected objects' first position to their last one, or None when
+    they do not move or do not travel one way (they end nearer their start than 80 % of their farthest
+    excursion: a circle, a back-and-forth)."""
+    track = _object_track(scene, object_ids)
+    disp = track - track[0]
+    far = float(np.linalg.norm(disp, axis=1).max())
+    norm = float(np.linalg.norm(disp[-1]))
+    return None if far < 1e-6 or norm < 0.8 * far else disp[-1] / norm
 
 
 def _rotation_between(u: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -24,6 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=49)
     p.add_argument("--fps", type=float, default=8.0)
     p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
+    p.add_argument("--strict", action="store_true",
+                   help="fail (exit 2) instead of substituting: a noun outside the library, a repaired misspelling")
     p.add_argument("--reconstruct", action="store_true",
                    help="write the scene reconstructed from the clip (about two minutes) instead of the "
                         "generator's ground truth")
@@ -73,13 +75,11 @@ def _generate(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps),
-                    reconstruction="fit" if args.reconstruct else "oracle")
+                    reconstruction="fit" if args.reconstruct else "oracle", strict=args.strict)
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)
-    scene = sim.reconstruct(clip)
-    for follow in plan.then:
-        scene = sim.edit(scene, follow.text)
+    scene = sim.apply_follow_ups(sim.reconstruct(clip), plan)
     seconds = time.perf_counter() - start
     with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
         stage = Path(tmp)
@@ -96,9 +96,6 @@ def _generate(args: argparse.Namespace) -> int:
         for f in stage.iterdir():
             shutil.move(str(f), out / f.name)
     print(json.dumps({k: summary[k] for k in ("prompt", "seed", "seconds", "setting", "edits")}))
-    for o in plan.objects:
-        if o.grounding in ("embedding", "open"):
-            print(f"noun {o.noun!r} is not in the library: using {o.category} (similarity {o.similarity:.2f})")
     print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
     return 0
 

@@ -24,6 +24,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..limits import check_clip_size
+from ..language.sequence import motion_stages
+from ..language.substitutions import plan_substitutions
 from ..scene import Camera, Gaussians, Motion, Provenance, Scene4D, SceneObject
 from ..scene.camera import camera_path
 from ..scene.parts import TANGENTIAL_SCALE, SurfaceCloud, parts_to_gaussians
@@ -35,6 +37,7 @@ from .real_assets import ASSET_MODES, ASSET_PREFIX, asset_cloud, pick_asset, set
 from .color_match import match_mean_color, tint_keep_shading
 from .settings import Setting, build_setting, carve_under, setting_levels
 from .trajectory import MotionRequest, PlannedTrajectory, bounce_height, plan_trajectory
+from .stages import fall, fall_drop, is_fall, second_stage
 
 __all__ = ["GenerationConfig", "ComposedScene", "compose_scene"]
 
@@ -252,6 +255,7 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
     all_size = max((float(max(i.half[0], i.half[1])) * 2 for i in instances), default=size)
     distance = max(distance, all_size * 1.6 * fx_over_w / 0.8)
     landmark_names = {getattr(m, k) for m in plan.motions for k in ("end", "start", "around") if getattr(m, k)}
+    meeting = _meeting_pairs(plan)
     back = [i for i in standers if i.spec.name not in landmark_names]
     spacing = all_size * 1.3
     row_half = (len(back) - 1) / 2 * spacing + all_size / 2
@@ -269,8 +273,7 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
             heights[inst.name] = levels["water_level"] - 0.12 * inst.half[2] * 2   # a shallow draft
         else:
             heights[inst.name] = 0.0
-    lift = {i.name: (bounce_height(i.half) if motions.get(i.spec.name) is not None
-                     and motions[i.spec.name].path == "bounce" else 0.0) for i in instances}
+    lift = {i.name: _lift_of(motions.get(i.spec.name), i) for i in instances}
     focus_z = float(np.mean([heights[i.name] + i.half[2] + lift[i.name] / 2 for i in key])) if key else 0.5
     tall = max((2 * float(i.half[2]) + lift[i.name] for i in key), default=size)
     fy_over_h = 0.5 / math.tan(math.radians(config.fov_y_deg) / 2)
@@ -280,6 +283,7 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         base_cam = Camera.look_at(eye, (0.0, 0.0, focus_z), config.width, config.height, config.fov_y_deg)
         span = distance * config.width / (2 * base_cam.fx)    # half-width of the view at the centre, metres
         _place(plan, movers, back, standers, landmark_names, by_spec, heights, size, span, spacing)
+        _place_meeting(meeting, by_spec, span)
         reach = max(abs(float(i.position[0])) + float(max(i.half[:2])) for i in instances)
         if reach <= 0.85 * span:
             break
@@ -297,14 +301,16 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
                             budget=int(config.setting_budget * config.detail), cameras=cameras)
     # ---- motion planning
     trajectories: dict[str, PlannedTrajectory] = {}
+    stages = motion_stages(plan)
     for inst in movers:
         m = motions[inst.spec.name]
-        req = _request(m, inst, by_spec, top_of)
+        req = _meeting_request(m, inst, by_spec) if inst.spec.name in meeting else _request(m, inst, by_spec, top_of)
         vertical = inst.mobility in ("air", "swim")
         traj = plan_trajectory(req, cameras, config.num_frames, config.fps, inst.half, inst.position,
                                vertical_plane=vertical, rolls=category_spec(inst.category).rolls)
         if req.path == "to" and req.end_height is not None:
             traj.positions[:, 2] = _rise_onto(traj.positions, req.end_height, inst.position[2])
+        traj = _staged(traj, m, inst, stages.get(inst.spec.name), cameras, vertical)
         inst.trajectory = traj
         trajectories[inst.name] = traj
     # ---- assemble Gaussians, objects and the motion scaffold
@@ -353,6 +359,34 @@ def _place(plan: Any, movers: list, back: list, standers: list, landmark_names: 
         inst.position = np.array([mover.position[0] + side * offset, mover.position[1], heights[inst.name]])
 
 
+def _meeting_pairs(plan: Any) -> dict[str, str]:
+    """Movers that head for each other ("two cars drive towards each other"): name -> the other's name."""
+    ends = {m.target: m.end for m in plan.motions if m.end is not None and m.path != "stop"}
+    return {a: b for a, b in ends.items() if ends.get(b) == a}
+
+
+def _place_meeting(meeting: dict[str, str], by_spec: dict, span: float) -> None:
+    """Two objects that meet start in one lane (the first one's), on either side of the centre."""
+    for a, b in meeting.items():
+        if a > b:
+            continue
+        first, second = by_spec[a][0], by_spec[b][0]
+        offset = 0.6 * span
+        lane = float(first.position[1])
+        left, right = (first, second) if a == min(meeting) else (second, first)
+        left.position = np.array([-offset, lane, float(left.position[2])])
+        right.position = np.array([offset, lane, float(right.position[2])])
+
+
+def _meeting_request(m: Any, inst: Instance, by_spec: dict) -> MotionRequest:
+    """Drive from where it stands to the midpoint between it and the other, stopping its own half-length
+    short of it: the two meet nose to nose without overlapping."""
+    other = by_spec[m.end][0]
+    mid = (np.asarray(inst.position) + np.asarray(other.position)) / 2
+    return MotionRequest("to", tuple(m.direction_world), m.speed, start=tuple(inst.position), end=tuple(mid),
+                         clearance=1.05 * float(inst.half[0]))          # half[0]: along its heading
+
+
 def _rise_onto(positions: np.ndarray, top: float, rest: float) -> np.ndarray:
     """Anchor heights climbing onto a receptacle over the last part of the approach."""
     end = positions[-1, :2]
@@ -379,6 +413,27 @@ def _request(m: Any, inst: Instance, by_spec: dict, top_of: dict) -> MotionReque
         return MotionRequest("circle", direction, m.speed, clockwise=m.clockwise is not False,
                              center=pos(m.around) if m.around else None)
     return MotionRequest(path, direction, m.speed, start=pos(m.start))
+
+
+def _lift_of(m: Any, inst: Instance) -> float:
+    """How far above its rest height an object's motion takes it (a bounce, a fall's start): framed by the camera."""
+    if m is None:
+        return 0.0
+    if m.path == "bounce":
+        return bounce_height(inst.half)
+    return fall_drop(inst.half) if is_fall(m.direction_world, m.path, inst.mobility) else 0.0
+
+
+def _staged(traj: PlannedTrajectory, m: Any, inst: Instance, stage: Any, cameras: list[Camera],
+            vertical: bool) -> PlannedTrajectory:
+    """A planned trajectory as a fall under gravity when it is one, then with its second stage if any."""
+    if is_fall(m.direction_world, m.path, inst.mobility):
+        traj = fall(traj, float(inst.position[2]), fall_drop(inst.half), cameras, inst.half)
+    if stage is not None:
+        d = m.direction_world
+        upright = vertical or (d is not None and abs(float(d[2])) > 0.7 and not is_fall(d, m.path, inst.mobility))
+        traj = second_stage(traj, stage, cameras, inst.half, anchor_is_base=not upright)
+    return traj
 
 
 def _yaw_quat(yaw: np.ndarray) -> np.ndarray:
@@ -453,8 +508,7 @@ def _assemble(plan: Any, instances: list[Instance], setting: Setting, cameras: l
     motion = Motion.rigid(np.concatenate(parts["nodes"]), rotations, translations,
                           node_objects=np.arange(1, len(instances) + 1))
     text = prompt if prompt is not None else getattr(plan, "text", None)
-    subs = tuple((o.noun, o.category, o.similarity) for o in plan.objects
-                 if getattr(o, "grounding", None) in ("embedding", "open"))
+    subs = tuple(sub.as_triple() for sub in plan_substitutions(plan))
     return Scene4D(g, motion, objects, config.fps, cameras,
                    provenance=Provenance(text, int(seed), "procedural", "none", substitutions=subs),
                    background=setting.background)

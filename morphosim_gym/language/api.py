@@ -7,12 +7,13 @@ from typing import Any
 from ..errors import CommandError
 from .plan import Plan
 from .rules import parse_rules
+from .substitutions import check_strict
 
 __all__ = ["parse"]
 
 
 def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend: str = "rules",
-          llm: Any = None) -> Plan:
+          llm: Any = None, strict: bool = False) -> Plan:
     """Turn a command into a validated `Plan`.
 
     Args:
@@ -27,6 +28,9 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
             `morphosim_gym.language.llm`), or "auto" ("llm" when an endpoint is configured, else
             "rules").
         llm: an `LLMConfig` for the "llm"/"auto" backends (default: from the environment).
+        strict: raise `CommandError` when the plan would substitute anything for what the text asks
+            (a noun outside the library grounded to the nearest one, a repaired misspelling; see
+            `morphosim_gym.language.substitutions`) instead of returning the plan with them.
 
     Returns:
         A `Plan` with mode "generate" or "edit" (follow-up edits of a compound command in
@@ -35,6 +39,13 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
     Raises:
         CommandError: the text could not be turned into a valid plan; no partial plan is returned.
     """
+    plan = _parse(text, scene, require_scene, backend, llm)
+    if strict:
+        check_strict(plan)
+    return plan
+
+
+def _parse(text: str, scene: Any, require_scene: bool, backend: str, llm: Any) -> Plan:
     if backend == "rules":
         return parse_rules(text, scene, require_scene)
     if backend in ("llm", "auto"):

@@ -17,6 +17,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="rules (offline default), llm (MORPHOSIM_LLM_* environment), or auto")
     p.add_argument("--require-scene", action="store_true", help="fail on an edit with no scene to apply to")
     p.add_argument("--compact", action="store_true", help="one-line JSON")
+    p.add_argument("--strict", action="store_true",
+                   help="fail (exit 2) instead of substituting: a noun outside the library, a repaired misspelling")
     p.set_defaults(func=_parse)
 
 
@@ -29,6 +31,9 @@ def _parse(args: argparse.Namespace) -> int:
 
         scene = load_scene(args.scene)
     text = " ".join(args.text)
-    plan = parse(text, scene, require_scene=args.require_scene, backend=args.backend)
+    plan = parse(text, scene, require_scene=args.require_scene, backend=args.backend, strict=args.strict)
+    from .substitutions import warn
+
+    warn(plan)                  # one note per substitution on stderr (the JSON on stdout stays clean)
     sys.stdout.write(plan.to_json(indent=None if args.compact else 2) + "\n")
     return 0

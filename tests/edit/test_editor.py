@@ -91,6 +91,15 @@ def test_redirect_and_speed(sim, bus):
     assert np.ptp(still, axis=0).max() < 1.0
 
 
+def test_redirect_to_where_it_already_goes_says_so(sim, bus):
+    """The bus goes left: "move the bus to the left" would change nothing, and says so instead of a silent no-op."""
+    with pytest.raises(ms.EditError, match="Nothing to change: bus already moves that way"):
+        sim.edit(bus, "move the bus to the left")
+    right = sim.edit(bus, "move the bus to the right")
+    with pytest.raises(ms.EditError, match="already moves that way"):
+        sim.edit(right, "move the bus to the right")
+
+
 def test_selection_by_meaning(sim, bus):
     assert sim.edit(bus, "make the vehicle yellow").object("bus").color == pytest.approx((1.0, 1.0, 0.0))
 

@@ -3,7 +3,7 @@
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.colors import CSS_COLORS, apply_modifier, color_rgb
+from morphosim_gym.colors import COMMON_COLORS, CSS_COLORS, apply_modifier, color_rgb
 from morphosim_gym.language.lexicon import SPEED_PHRASES
 from morphosim_gym.language.vocabulary import CATEGORIES
 
@@ -50,10 +50,31 @@ def test_paper_edit_captions(text, op, targets):
 
 @pytest.mark.parametrize("name", sorted(CSS_COLORS))
 def test_every_css_colour_name(name):
+    """A bare name is the everyday colour where `COMMON_COLORS` has one, else the CSS value; "css:<name>"
+    is always the exact CSS value."""
+    want = COMMON_COLORS.get(name, CSS_COLORS[name])
     plan = ms.parse(f"make the ball {name}")
-    assert plan.edits[0].color.rgb == CSS_COLORS[name]
+    assert plan.edits[0].color.rgb == want
     plan = ms.parse(f"a {name} cube slides to the left")
+    assert plan.objects[0].color.rgb == want
+    plan = ms.parse(f"make the ball css:{name}")
+    assert plan.edits[0].color.rgb == CSS_COLORS[name] and plan.edits[0].color.name == f"css:{name}"
+    plan = ms.parse(f"a css:{name} cube slides to the left")
     assert plan.objects[0].color.rgb == CSS_COLORS[name]
+
+
+def test_common_colour_names_look_like_their_names():
+    """Brown is a brown (red > green > blue, not CSS's dark red), purple has more blue than red, green is not
+    CSS's dark green, and a multi-word CSS name can be asked for exactly."""
+    r, g, b = color_rgb("brown")
+    assert r > g > b and g > 0.3 * r
+    assert color_rgb("css:brown") == CSS_COLORS["brown"] == (0.647059, 0.164706, 0.164706)
+    r, g, b = color_rgb("purple")
+    assert b > r > g
+    assert color_rgb("green")[1] > 0.6
+    assert color_rgb("beige") != CSS_COLORS["beige"] and min(color_rgb("beige")) < 0.7
+    assert ms.parse("make the ball css: dark olive green").edits[0].color.rgb == CSS_COLORS["darkolivegreen"]
+    assert ms.parse("a brown dog runs left").objects[0].color.rgb == COMMON_COLORS["brown"]
 
 
 def test_colour_modifiers_are_deterministic_and_in_range():
@@ -213,3 +234,10 @@ def test_vocabulary_categories_all_parse():
         assert plan.objects[0].category == name, name
         if cat.plural != name:
             assert ms.parse(f"two {cat.plural} move to the left").objects[0].count == 2
+
+
+@pytest.mark.parametrize("text, keep", [("delete everything except the bus", "bus"),
+                                        ("remove everything but the red car", "red car")])
+def test_delete_everything_except_points_to_extract(text, keep):
+    with pytest.raises(ms.CommandError, match=f"say 'extract the {keep}'"):
+        ms.parse(text)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ...errors import CommandError
 from ..grounding import ground_noun, ground_noun_vocabulary
@@ -27,6 +27,7 @@ from .motion import Predicate, combine_directions, merge_motion, merge_pred, pat
 from .nouns import NounPhrase, clause_boundary, parse_np
 from .scanner import PhraseScanner
 from .tokens import detok, is_number
+from .unsupported import refuse_unsupported
 
 __all__ = ["DescriptionReader", "ObjectDraft", "number_agreement"]
 
@@ -113,6 +114,7 @@ class DescriptionReader:
     # ---- generate ------------------------------------------------------------------------------------
     def _generate_segment(self, toks: list[str]) -> None:
         toks, cam_spans = extract_camera_clauses(toks)
+        refuse_unsupported(toks)
         pending: Predicate | None = None
         i = 0
         n = len(toks)
@@ -222,7 +224,14 @@ class DescriptionReader:
             direction = pred.oscillate_axis
         if path == "bounce" and pred.oscillate:
             direction = None
-        for o in objs:
+        if pred.mutual:
+            objs = self._meeting_pair(objs, toks)
+            if direction is not None or start or end_ or around or path not in ("straight", "bounce", "zigzag"):
+                raise CommandError(f"Could not understand {detok(toks)!r}: two objects moving towards each other take "
+                                   f"no other direction, landmark or path; say e.g. 'two cars drive towards each other'")
+        for k, o in enumerate(objs):
+            if pred.mutual:      # the first comes from the left, the second from the right; each heads for the other
+                direction, end_ = ((1.0, 0.0, 0.0), objs[1].name) if k == 0 else ((-1.0, 0.0, 0.0), objs[0].name)
             if o.name in (start, end_, around):
                 raise CommandError(f"Could not understand {detok(toks)!r}: {o.noun!r} cannot move to or around itself")
             m = {"target": o.name, "path": path, "direction_world": direction,
@@ -234,6 +243,24 @@ class DescriptionReader:
                 m = merge_motion(old, m)
             self.motions[o.name] = m
             self._touch(o.name)
+
+    def _meeting_pair(self, objs: list[ObjectDraft], toks: list[str]) -> list[ObjectDraft]:
+        """The two objects of "towards each other": two subjects, or one subject of count 2 made two objects."""
+        if len(objs) == 1 and objs[0].count == 2:
+            first = objs[0]
+            first.count = 1
+            names = {o.name for o in self.objects}
+            k = 2
+            while f"{first.noun}_{k}" in names:
+                k += 1
+            second = replace(first, name=f"{first.noun}_{k}")
+            self.objects.insert(self.objects.index(first) + 1, second)
+            return [first, second]
+        if len(objs) == 2 and all(o.count == 1 for o in objs):
+            return objs
+        found = " and ".join(f"{o.count} {o.noun}" for o in objs)
+        raise CommandError(f"Could not understand {detok(toks)!r}: 'towards each other' is supported for two objects "
+                           f"('two cars', 'a car and a truck'), found {found}")
 
     def _touch(self, name: str) -> None:
         if name in self.salience:

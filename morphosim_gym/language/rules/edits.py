@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ...colors import color_rgb, match_color
+from ...errors import CommandError
 from ..lexicon import (
     ADDITIVE_COLORS,
     BRIGHTER,
@@ -167,8 +168,18 @@ class EditReader(EditPhrases):
         if rest and rest[0] == "out":
             rest = rest[1:]
         targets, k = self._targets(rest)
+        self._refuse_except(w, rest, k)
         self._no_leftover(rest[k:])
         return [{"op": "remove", "targets": targets}]
+
+    def _refuse_except(self, w: str, rest: list[str], k: int) -> None:
+        """ "delete everything except the bus": a remove that keeps something is an extract; say so."""
+        tail = rest[k:]
+        if tail and tail[0] in ("except", "but", "besides", "apart"):
+            kept = [x for x in tail[1:] if x not in ("for", "from", "the", "a", "an")]
+            keep = " ".join(kept) or "X"
+            raise CommandError(f"Could not understand the edit {self.seg!r}: '{w} everything {tail[0]} ...' is not an "
+                               f"edit of its own; to keep only the {keep} say 'extract the {keep}'")
 
     def _take(self, w: str, toks: list[str], rest: list[str]) -> list[dict]:
         """ "take out the ball", "take the ball away"."""

@@ -45,6 +45,7 @@ class Predicate:
     reverse: bool = False
     unknown: list[str] = field(default_factory=list)
     with_nps: list[NounPhrase] = field(default_factory=list)
+    mutual: bool = False  # "towards each other": two subjects that meet
 
     def has_motion(self) -> bool:
         return bool([v for v in self.verbs if v[1] != "aux"] or self.dirs or self.from_side or self.to_side
@@ -89,6 +90,7 @@ def merge_pred(dst: Predicate, src: Predicate) -> Predicate:
     dst.settings += src.settings
     dst.stationary = dst.stationary or src.stationary
     dst.oscillate = dst.oscillate or src.oscillate
+    dst.mutual = dst.mutual or src.mutual
     return dst
 
 

@@ -8,6 +8,7 @@ from ...errors import CommandError
 from ..grounding import SceneItem, scene_items
 from ..lexicon import COMPOUNDS, EXAMPLES, correct_typo
 from ..plan import CameraSpec, EditOp, MotionSpec, ObjectSpec, Plan
+from ..sequence import motion_stages
 from ..vocabulary import CATEGORIES, DEFAULT_SETTING
 from .describe import DescriptionReader, ObjectDraft
 from .segments import camera_decl_to_edit, classify, split_segments
@@ -91,8 +92,10 @@ class RuleParser(DescriptionReader, TargetResolver):
                     break
         if not objects and source != "text":
             raise CommandError(f"Could not understand {self.text!r}: no object to generate. Try e.g. " + EXAMPLES[0])
-        return Plan(mode="generate", text=self.text, objects=objects, motions=motions,
+        plan = Plan(mode="generate", text=self.text, objects=objects, motions=motions,
                     camera=self.camera or CameraSpec(), setting=setting, setting_source=source, then=then)
+        motion_stages(plan)        # a second stage ("... then stops") must continue a motion: refused here if not
+        return plan
 
 
 def parse_rules(text: str, scene: Any = None, require_scene: bool = False) -> Plan:

@@ -165,6 +165,8 @@ def _side_to_side(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
 def _to_each_other(sc: PhraseScanner, i: int, pred: Predicate) -> int | None:
     """ "towards each other": a relation between the subjects, not an object."""
     if sc.next_word(i) in ("each", "one") and sc.word_at(i + 2) in ("other", "another"):
+        if sc.span[i] in ("to", "toward"):       # "toward(s) each other": the two subjects meet
+            pred.mutual = True
         return i + 3
     return None
 

@@ -7,7 +7,7 @@ import re
 from collections.abc import Sequence
 from typing import Any
 
-from ...colors import match_color
+from ...colors import is_color_word, match_color
 from ...errors import CommandError
 from ..count_words import refuse_unbounded_count
 from ..lexicon import (
@@ -50,7 +50,17 @@ __all__ = [
 _COMPOUND_RE = re.compile(r"\b(" + "|".join(re.escape(k) for k in sorted(COMPOUNDS, key=len, reverse=True)) + r")\b")
 
 
-_TOKEN_RE = re.compile(r"-?\d+(?:\.\d+)?|[a-z]+(?:'[a-z]+)?|[.,;!?:]")
+_TOKEN_RE = re.compile(r"css:[a-z]+|-?\d+(?:\.\d+)?|[a-z]+(?:'[a-z]+)?|[.,;!?:]")
+# "css: dark olive green" -> "css:darkolivegreen": one token for an exact CSS colour (see `colors`)
+_CSS_RE = re.compile(r"\bcss:\s*((?:[a-z]+\s*){1,4})")
+
+
+def _css_token(m: re.Match) -> str:
+    words = m.group(1).split()
+    for k in range(len(words), 0, -1):
+        if is_color_word("css:" + "".join(words[:k])):
+            return "css:" + "".join(words[:k]) + " " + " ".join(words[k:]) + " "
+    return m.group(0)
 
 
 _POWER_RE = re.compile(r"(\d{1,6})\s*(?:\^|\*\*)\s*(\d{1,6})")
@@ -67,7 +77,7 @@ def _power(m: re.Match) -> str:
 
 def tokenize(text: str) -> list[str]:
     """Lower-cased word, number and punctuation tokens with the parser's normalisations."""
-    t = _POWER_RE.sub(_power, text.lower())
+    t = _CSS_RE.sub(_css_token, _POWER_RE.sub(_power, text.lower()))
     t = (t.replace("\u2019", "'").replace("\u2018", "'").replace("\u201c", '"').replace("\u201d", '"')
          .replace("\u2014", " , ").replace("\u2013", " , ").replace("`", "'"))
     t = re.sub(r"(\d)\s*x\b", r"\1 times", t)
