@@ -116,7 +116,7 @@ class MorphoSimEnv(gym.Env):
         target_name = opts.target if opts.target is not None else self.config.target
         target = self._task.resolve_target(scene, target_name or request.target or None)
         description = request.target_description if request.target_description and not target_name \
-            else describe_object(target)
+            else describe_object(target, scene)
         policy = opts.on_edit_error or self.config.on_edit_error
         self._edits, self._edit_errors = [], []
         world = SceneWorld(scene, target)          # geometry (target size, focus) from the unedited scene

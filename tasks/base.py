@@ -37,12 +37,12 @@ def a_or_an(text: str) -> str:
     return "an" if text[:1].lower() in "aeiou" else "a"
 
 
-def describe_object(obj: "SceneObject") -> str:
+def describe_object(obj: "SceneObject", scene: "Scene4D | None" = None) -> str:
     """Words for an object in an instruction: its asked colour (nearest basic name) and what it is: the
-    noun as written when the library knows it ("sedan", a car), else the category it was grounded to
-    (a "kangaroo" generated as a duck is "the duck": the instruction names what is in the scene)."""
+    noun as written, unless the scene's provenance says that noun was substituted (a "kangaroo"
+    generated as a duck is "the duck": the instruction names what is in the scene)."""
     noun = obj.category if obj.name.rsplit("_", 1)[-1].isdigit() else obj.name
-    if noun == obj.name and _substituted(obj):
+    if noun == obj.name and scene is not None and obj.name in substituted_nouns(scene):
         noun = obj.category
     if obj.color is None:
         return noun
@@ -53,13 +53,9 @@ def describe_object(obj: "SceneObject") -> str:
     return f"{best} {noun}"
 
 
-def _substituted(obj: "SceneObject") -> bool:
-    """Whether the object's name is a word outside the library that was grounded to another category."""
-    from morphosim_gym.language.open_vocab import is_open_category
-    from morphosim_gym.language.vocabulary import noun_to_category
-
-    return (obj.name != obj.category and not is_open_category(obj.category)
-            and noun_to_category(obj.name.replace(" ", "")) is None and noun_to_category(obj.name) is None)
+def substituted_nouns(scene: "Scene4D") -> frozenset[str]:
+    """The words of the prompt that the scene shows as something else (its provenance's record)."""
+    return frozenset(asked for asked, *_ in scene.provenance.substitutions)
 
 
 def check_camera_override(camera: Any) -> dict:

@@ -52,7 +52,7 @@ def _color_word(description: str, noun: str) -> str:
 def template_values(scene: Scene4D, task: Task, request: SceneRequest) -> dict[str, Optional[str]]:
     """Values of the edit template fields for this scene (None where the scene has no such thing)."""
     target = task.resolve_target(scene, request.target or None)
-    described = {o.id: describe_object(o) for o in scene.objects if o.role != "background"}
+    described = {o.id: describe_object(o, scene) for o in scene.objects if o.role != "background"}
     target_desc = request.target_description or described[target.id]
     others = [o for o in scene.objects if o.role != "background" and o.id != target.id]
     distractor = others[0] if others else None

@@ -44,12 +44,18 @@ def test_the_pipeline_warns_records_and_in_strict_mode_refuses():
 
 
 def test_a_task_instruction_names_what_is_in_the_scene():
-    from morphosim_gym.scene import SceneObject
-    from morphosim_gym.tasks import describe_object
+    from dataclasses import replace
 
-    assert describe_object(SceneObject(1, "kangaroo", "duck")) == "duck"
-    assert describe_object(SceneObject(1, "taxi", "car")) == "taxi"          # a library synonym stays as written
-    assert describe_object(SceneObject(1, "cylinder", "cylinder")) == "cylinder"
+    from morphosim_gym.scene import Provenance, SceneObject
+    from morphosim_gym.tasks import describe_object
+    from tests.conftest import make_tiny_scene
+
+    scene = make_tiny_scene(n_per_object=10)
+    scene = replace(scene, provenance=Provenance("a kangaroo", 0, "test", substitutions=(("kangaroo", "duck", 0.59),)))
+    assert describe_object(SceneObject(1, "kangaroo", "duck"), scene) == "duck"
+    assert describe_object(SceneObject(1, "kangaroo", "duck")) == "kangaroo"     # no scene: as written
+    assert describe_object(SceneObject(1, "taxi", "car"), scene) == "taxi"   # a library synonym stays as written
+    assert describe_object(SceneObject(1, "cylinder", "cylinder"), scene) == "cylinder"
 
 
 def test_cli_parse_prints_one_note_per_substitution_and_strict_fails(capsys):
