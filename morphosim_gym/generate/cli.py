@@ -20,13 +20,24 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("prompt")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=int, default=128, help="frame width and height in pixels")
-    p.add_argument("--frames", type=int, default=49)
-    p.add_argument("--fps", type=float, default=8.0)
+    p.add_argument("--size", type=int, default=None,
+                   help="frame width and height in pixels (default 128; diffusion: its config's, 720x480)")
+    p.add_argument("--frames", type=int, default=None, help="clip frames (default 49, or the diffusion config's)")
+    p.add_argument("--fps", type=float, default=None, help="frame rate (default 8, or the diffusion config's)")
     p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
     p.add_argument("--reconstruct", action="store_true",
                    help="write the scene reconstructed from the clip (about two minutes) instead of the "
-                        "generator's ground truth")
+                        "generator's ground truth (a generator without one, e.g. diffusion, writes no scene "
+                        "without this flag)")
+    p.add_argument("--generator", default="procedural",
+                   help="clip generator: procedural (default), diffusion (local CogVideoX weights, see "
+                        "--weights), or module:factory (imports and runs that module)")
+    p.add_argument("--weights", default=None,
+                   help="diffusion: local directory of a diffusers CogVideoX pipeline (never downloaded)")
+    p.add_argument("--diffusion-config", default=None,
+                   help="diffusion: a YAML file of DiffusionConfig keys (device, num_inference_steps, guidance...)")
+    p.add_argument("--steps", type=int, default=None, help="diffusion: denoising steps (num_inference_steps)")
+    _parser_option(p)
     p.set_defaults(func=_generate)
 
     p = sub.add_parser("render", help="render a scene file to a video (optionally orbiting it)")
@@ -44,7 +55,48 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("text")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--novel-yaw", type=float, default=30.0, help="yaw of the novel view, degrees")
+    _parser_option(p)
     p.set_defaults(func=_edit)
+
+
+def _parser_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--parser", default="rules",
+                   help="command parser: rules (offline default), llm (the MORPHOSIM_LLM_* environment), auto, "
+                        "or module:factory")
+
+
+def _diffusion_config(args: argparse.Namespace) -> object:
+    """The `DiffusionConfig` of the generate flags (a YAML file, then --weights, --size, --frames,
+    --fps and --steps over it)."""
+    from ..config_yaml import load_yaml_file
+    from .diffusion.backend import DiffusionConfig
+
+    data = load_yaml_file(args.diffusion_config) if args.diffusion_config else {}
+    if not isinstance(data, dict):
+        raise ValueError(f"Expected a mapping of diffusion keys in {args.diffusion_config}, found "
+                         f"{type(data).__name__}")
+    data = dict(data.get("diffusion", data))
+    flags = {"weights_path": args.weights, "height": args.size, "width": args.size, "num_frames": args.frames,
+             "fps": args.fps, "num_inference_steps": args.steps}
+    data.update({k: v for k, v in flags.items() if v is not None})
+    return DiffusionConfig.from_dict(data)
+
+
+def _sim_config(args: argparse.Namespace) -> object:
+    """The `SimConfig` of the generate flags."""
+    from ..pipeline import SimConfig
+    from .compose import GenerationConfig
+
+    generation = GenerationConfig(width=args.size or 128, height=args.size or 128, num_frames=args.frames or 49,
+                                  fps=args.fps or 8.0)
+    diffusion = _diffusion_config(args) if args.generator == "diffusion" else None
+    if args.generator != "diffusion" and (args.weights or args.diffusion_config or args.steps):
+        raise ValueError(f"Expected --weights, --diffusion-config and --steps only with --generator diffusion, "
+                         f"found --generator {args.generator}")
+    # a generator other than the procedural one may have no ground truth: fit when asked, else keep its clip
+    reconstruction = "oracle" if args.generator == "procedural" and not args.reconstruct else "fit"
+    return SimConfig(generator=args.generator, generation=generation, reconstruction=reconstruction,
+                     diffusion=diffusion, parser=args.parser)
 
 
 def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
@@ -69,28 +121,36 @@ def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
 def _generate(args: argparse.Namespace) -> int:
     from ..pipeline import MorphoSim
     from ..scene import save_clip, save_scene
-    from .compose import GenerationConfig
 
     out = Path(args.out)
-    sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps),
-                    reconstruction="fit" if args.reconstruct else "oracle")
+    sim = MorphoSim(_sim_config(args))
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)
-    scene = sim.reconstruct(clip)
-    for follow in plan.then:
-        scene = sim.edit(scene, follow.text)
+    scene = None
+    if args.reconstruct or clip.ground_truth is not None:
+        scene = sim.reconstruct(clip) if args.reconstruct or sim.config.reconstruction == "oracle" \
+            else clip.ground_truth
+        for follow in plan.then:
+            scene = sim.edit(scene, follow.text)
     seconds = time.perf_counter() - start
     with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
         stage = Path(tmp)
         write_video(list(clip.frames), stage / f"clip.{args.format}", clip.fps)
-        save_scene(scene, stage / "scene.msim")
+        if scene is not None:
+            save_scene(scene, stage / "scene.msim")
         save_clip(clip, stage / "clip.mclip")
+        objects = [o.to_dict() for o in scene.objects] if scene is not None else \
+            [{"id": int(i), "name": name} for i, name in sorted(clip.labels.items())]
         summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
+                   "generator": sim.config.generator, "parser": sim.config.parser,
                    "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
-                   "objects": [o.to_dict() for o in scene.objects], "setting": clip.info.get("setting"),
-                   "edits": list(scene.history), "plan": plan.to_dict(), "scene_id": scene.content_hash(),
+                   "objects": objects, "setting": clip.info.get("setting"),
+                   "edits": list(scene.history) if scene is not None else [], "plan": plan.to_dict(),
+                   "scene_id": scene.content_hash() if scene is not None else None,
                    "trajectories": clip.info.get("trajectories", {})}
+        if clip.info.get("guidance"):
+            summary["guidance_energy"] = clip.info["guidance"].get("energy")
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
         out.mkdir(parents=True, exist_ok=True)
         for f in stage.iterdir():
@@ -99,7 +159,12 @@ def _generate(args: argparse.Namespace) -> int:
     for o in plan.objects:
         if o.grounding in ("embedding", "open"):
             print(f"noun {o.noun!r} is not in the library: using {o.category} (similarity {o.similarity:.2f})")
-    print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
+    if scene is None:
+        skipped = f" (follow-up edits {[f.text for f in plan.then]} need a scene)" if plan.then else ""
+        print(f"wrote {out}/clip.{args.format}, clip.mclip, summary.json; no scene.msim: the {sim.config.generator} "
+              f"clip has no ground truth, pass --reconstruct to fit one{skipped}")
+    else:
+        print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
     return 0
 
 
@@ -131,7 +196,7 @@ def _edit(args: argparse.Namespace) -> int:
     from ..scene import load_scene, save_scene
 
     scene = load_scene(args.scene)
-    sim = MorphoSim()
+    sim = MorphoSim(parser=args.parser)
     start = time.perf_counter()
     edited = sim.edit(scene, args.text)
     seconds = time.perf_counter() - start

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import CommandError
+from ..errors import CommandError, UnknownBackendError
 from .plan import Plan
-from .rules import parse_rules
 
 __all__ = ["parse"]
 
@@ -25,7 +24,7 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
             inspected without a scene; pronouns with nothing to refer to always raise.
         backend: "rules" (offline default), "llm" (an OpenAI-compatible chat endpoint, see
             `morphosim_gym.language.llm`), or "auto" ("llm" when an endpoint is configured, else
-            "rules").
+            "rules"), or a ``"module:factory"`` parser (see `language.backends`).
         llm: an `LLMConfig` for the "llm"/"auto" backends (default: from the environment).
 
     Returns:
@@ -35,13 +34,10 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
     Raises:
         CommandError: the text could not be turned into a valid plan; no partial plan is returned.
     """
-    if backend == "rules":
-        return parse_rules(text, scene, require_scene)
-    if backend in ("llm", "auto"):
-        from .llm import LLMConfig, parse_llm
+    from .backends import PARSERS
 
-        config = llm if llm is not None else LLMConfig.from_env()
-        if backend == "auto" and not config.configured:
-            return parse_rules(text, scene, require_scene)
-        return parse_llm(text, scene, config=config, require_scene=require_scene)
-    raise CommandError(f"Expected backend 'rules', 'llm' or 'auto', found {backend!r}")
+    try:
+        parser = PARSERS.create(PARSERS.check(backend), llm)
+    except UnknownBackendError as e:
+        raise CommandError(f"Expected backend {PARSERS.known()}, found {backend!r}") from e
+    return parser.parse(text, scene, require_scene=require_scene)
