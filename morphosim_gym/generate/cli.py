@@ -87,12 +87,15 @@ def _sim_config(args: argparse.Namespace) -> object:
     from ..pipeline import SimConfig
     from .compose import GenerationConfig
 
-    generation = GenerationConfig(width=args.size or 128, height=args.size or 128, num_frames=args.frames or 49,
-                                  fps=args.fps or 8.0)
+    defaults = GenerationConfig()
+    size = {"width": args.size, "height": args.size, "num_frames": args.frames, "fps": args.fps}
+    generation = GenerationConfig(**{k: getattr(defaults, k) if v is None else v for k, v in size.items()})
     diffusion = _diffusion_config(args) if args.generator == "diffusion" else None
-    if args.generator != "diffusion" and (args.weights or args.diffusion_config or args.steps):
-        raise ValueError(f"Expected --weights, --diffusion-config and --steps only with --generator diffusion, "
-                         f"found --generator {args.generator}")
+    given = [flag for flag, v in (("--weights", args.weights), ("--diffusion-config", args.diffusion_config),
+                                  ("--steps", args.steps)) if v is not None]
+    if diffusion is None and given:
+        raise ValueError(f"Expected {', '.join(given)} only with --generator diffusion, found --generator "
+                         f"{args.generator}")
     # a generator other than the procedural one may have no ground truth: fit when asked, else keep its clip
     reconstruction = "oracle" if args.generator == "procedural" and not args.reconstruct else "fit"
     return SimConfig(generator=args.generator, generation=generation, reconstruction=reconstruction,
@@ -127,30 +130,15 @@ def _generate(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)
-    scene = None
-    if args.reconstruct or clip.ground_truth is not None:
-        scene = sim.reconstruct(clip) if args.reconstruct or sim.config.reconstruction == "oracle" \
-            else clip.ground_truth
-        for follow in plan.then:
-            scene = sim.edit(scene, follow.text)
+    scene = _scene_of(sim, clip, plan, args.reconstruct)
     seconds = time.perf_counter() - start
+    summary = _summary(args, sim, plan, clip, scene, seconds)
     with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
         stage = Path(tmp)
         write_video(list(clip.frames), stage / f"clip.{args.format}", clip.fps)
         if scene is not None:
             save_scene(scene, stage / "scene.msim")
         save_clip(clip, stage / "clip.mclip")
-        objects = [o.to_dict() for o in scene.objects] if scene is not None else \
-            [{"id": int(i), "name": name} for i, name in sorted(clip.labels.items())]
-        summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
-                   "generator": sim.config.generator, "parser": sim.config.parser,
-                   "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
-                   "objects": objects, "setting": clip.info.get("setting"),
-                   "edits": list(scene.history) if scene is not None else [], "plan": plan.to_dict(),
-                   "scene_id": scene.content_hash() if scene is not None else None,
-                   "trajectories": clip.info.get("trajectories", {})}
-        if clip.info.get("guidance"):
-            summary["guidance_energy"] = clip.info["guidance"].get("energy")
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
         out.mkdir(parents=True, exist_ok=True)
         for f in stage.iterdir():
@@ -166,6 +154,38 @@ def _generate(args: argparse.Namespace) -> int:
     else:
         print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
     return 0
+
+
+def _scene_of(sim: object, clip: object, plan: object, reconstruct: bool) -> object:
+    """The scene `morphosim generate` writes: fitted (--reconstruct), the generator's ground truth, or
+    None for a clip without one; follow-up edits applied."""
+    if reconstruct or sim.config.reconstruction == "oracle":
+        scene = sim.reconstruct(clip)
+    elif clip.ground_truth is not None:
+        scene = clip.ground_truth
+    else:
+        return None
+    for follow in plan.then:
+        scene = sim.edit(scene, follow.text)
+    return scene
+
+
+def _summary(args: argparse.Namespace, sim: object, plan: object, clip: object, scene: object,
+             seconds: float) -> dict:
+    """summary.json of `morphosim generate` (objects from the clip's labels when there is no scene)."""
+    objects = [{"id": int(i), "name": name} for i, name in sorted(clip.labels.items())] if scene is None \
+        else [o.to_dict() for o in scene.objects]
+    summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
+               "generator": sim.config.generator, "parser": sim.config.parser,
+               "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
+               "objects": objects, "setting": clip.info.get("setting"),
+               "edits": [] if scene is None else list(scene.history), "plan": plan.to_dict(),
+               "scene_id": None if scene is None else scene.content_hash(),
+               "trajectories": clip.info.get("trajectories", {})}
+    guidance = clip.info.get("guidance")
+    if guidance:
+        summary["guidance_energy"] = guidance.get("energy")
+    return summary
 
 
 def _render(args: argparse.Namespace) -> int:
