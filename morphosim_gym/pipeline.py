@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Optional
@@ -55,13 +56,13 @@ class SimConfig:
         generation: clip size, length and detail.
         render_backend: renderer used for frames, selections and the envs' observations: "cpu"
             (default), "torch" (reference) or "gsplat" (CUDA).
-        diffusion: settings of the "diffusion" generator (`DiffusionConfig`: weights_path, device,
-            steps, guidance...); None = its defaults (which name no weights).
+        diffusion: settings of the "diffusion" generator (`DiffusionConfig`, or a mapping of its keys:
+            weights_path, device, steps, guidance...); None = its defaults (which name no weights).
         parser: what parses prompts and edits (`language.backends.PARSERS`): "rules" (offline
             default), "llm" (an OpenAI-compatible endpoint, `llm`), "auto" ("llm" when `llm` names an
             endpoint and a model, else "rules"), or "module:factory" (called with `llm`).
-        llm: the endpoint of the "llm" / "auto" parsers (`LLMConfig`); None = the MORPHOSIM_LLM_*
-            environment.
+        llm: the endpoint of the "llm" / "auto" parsers (`LLMConfig`, or a mapping of its keys); None =
+            the MORPHOSIM_LLM_* environment.
         cache: cache on disk by content hash: generated clips, and with `reconstruction="oracle"`
             the composed scenes `generate` returns (`.msim` files under `cache_dir/scene/`).
         cache_dir: where; None = `default_cache_dir()`.
@@ -89,12 +90,16 @@ class SimConfig:
         if self.diffusion is not None:
             from .generate.diffusion.backend import DiffusionConfig
 
+            if isinstance(self.diffusion, Mapping):        # e.g. a YAML section
+                object.__setattr__(self, "diffusion", DiffusionConfig.from_dict(self.diffusion))
             if not isinstance(self.diffusion, DiffusionConfig):
                 raise ValueError(f"Expected diffusion as a DiffusionConfig or None, found "
                                  f"{type(self.diffusion).__name__}")
         if self.llm is not None:
             from .language.llm import LLMConfig
 
+            if isinstance(self.llm, Mapping):
+                object.__setattr__(self, "llm", LLMConfig.from_dict(self.llm))
             if not isinstance(self.llm, LLMConfig):
                 raise ValueError(f"Expected llm as an LLMConfig or None, found {type(self.llm).__name__}")
 

@@ -119,6 +119,9 @@ def test_diffusion_needs_fit_and_local_weights(weights, tmp_path):
     with pytest.raises(ms.BackendUnavailableError, match="does not exist"):
         ms.MorphoSim(generator="diffusion", diffusion=DiffusionConfig(weights_path=tmp_path / "none"))
     assert not (tmp_path / "none").exists()
+    assert ms.SimConfig(diffusion={"num_frames": 9}).diffusion == DiffusionConfig(num_frames=9)   # a YAML mapping
+    with pytest.raises(ValueError, match="unknown \\['steps'\\]"):
+        ms.SimConfig(diffusion={"steps": 4})
 
 
 def test_clip_cache_key_holds_the_diffusion_settings(weights, tmp_path):

@@ -141,6 +141,9 @@ def test_llm_parser_with_an_unreachable_endpoint_fails_or_falls_back_as_configur
 
 def test_bad_llm_setting_is_a_clear_error():
     with pytest.raises(ValueError, match="Expected llm as an LLMConfig"):
-        ms.SimConfig(parser="llm", llm={"base_url": "http://127.0.0.1:1/v1"})
+        ms.SimConfig(parser="llm", llm="http://127.0.0.1:1/v1")
+    with pytest.raises(ValueError, match="llm.timeout_s"):
+        ms.SimConfig(parser="llm", llm={"base_url": "http://127.0.0.1:1/v1", "timeout_s": -1})
+    assert ms.SimConfig(llm={"base_url": "http://127.0.0.1:1/v1", "model": "m"}).llm.configured
     with pytest.raises(ms.CommandError, match="'rules', 'llm', 'auto', or 'module:factory'.*'gpt'"):
         ms.parse("make the bus blue", backend="gpt")
