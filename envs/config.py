@@ -167,6 +167,21 @@ def env_signature(defaults: Optional[Mapping[str, Any]] = None) -> inspect.Signa
         for f in fields(EnvConfig)])
 
 
+def render_backend_of(sim: Any) -> str:
+    """The render backend a sim names (`sim.config.render_backend`; "cpu" for a sim without one),
+    checked to run here (`BackendUnavailableError` at make, never mid-episode)."""
+    from morphosim_gym.errors import BackendUnavailableError
+    from morphosim_gym.render.api import BACKENDS, backend_available
+
+    backend = getattr(getattr(sim, "config", None), "render_backend", "cpu")
+    if backend not in BACKENDS:
+        raise ValueError(f"Expected the sim's render_backend in {BACKENDS}, found {backend!r}")
+    if not backend_available(backend):
+        raise BackendUnavailableError(f"The sim's render_backend {backend!r} cannot run here (gsplat needs the "
+                                      f"gsplat package and a CUDA GPU); use render_backend='cpu'")
+    return backend
+
+
 def make_sim(sim: Any) -> Any:
     """The env's `MorphoSim`: `sim` itself, one built from a `SimConfig`, or from
     `DEFAULT_SIM_CONFIG` for None."""

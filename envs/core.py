@@ -21,7 +21,7 @@ from morphosim_gym.rig import AGENT_OBJECT_ID
 from morphosim_gym.scene import Scene4D
 from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
 
-from .config import RENDER_MODES, EnvConfig, env_signature, make_sim
+from .config import RENDER_MODES, EnvConfig, env_signature, make_sim, render_backend_of
 from .edits import apply_edit
 from .options import ResetOptions
 from .scenes import SceneChooser, SceneSource
@@ -56,6 +56,7 @@ class MorphoSimEnv(gym.Env):
             raise ValueError(f"Expected a task of kind {self.task_kind!r} for this env, found {self._task.kind!r}")
         self._rig = self._task.make_rig()
         self._sim = make_sim(cfg.sim)
+        self._render_backend = render_backend_of(self._sim)
         self._source = SceneSource(self._sim)
         cams = observed_cameras(cfg.cameras, self._task.default_cameras, self._rig.camera_names)
         self._observe = Observations(cams, cfg.width, cfg.height, cfg.depth, cfg.segmentation, self._rig)
@@ -96,6 +97,11 @@ class MorphoSimEnv(gym.Env):
     def scene(self) -> Scene4D:
         """The current (possibly edited) scene."""
         return self.world.scene
+
+    @property
+    def render_backend(self) -> str:
+        """The renderer of observations and `render()`: the sim's `config.render_backend` ("cpu" default)."""
+        return self._render_backend
 
     @property
     def dt(self) -> float:
@@ -210,7 +216,8 @@ class MorphoSimEnv(gym.Env):
     def _render(self, t: float) -> tuple[Views, TaskView]:
         """Every render camera's view at scene time t, and the task camera's `TaskView`."""
         sources, cams, background, sky = self._render_request(t)
-        return self._rendered(cams, render_scene(sources, cams, background=background, sky=sky), t)
+        out = render_scene(sources, cams, background=background, sky=sky, backend=self._render_backend)
+        return self._rendered(cams, out, t)
 
     def _render_request(self, t: float) -> tuple[list, list, tuple, Optional[np.ndarray]]:
         """What `_render` draws at time t: (Gaussian sources, one camera per render camera, background,
@@ -234,7 +241,7 @@ class MorphoSimEnv(gym.Env):
         cam = self._rig.camera(self._observe.cameras[0], self.config.render_width, self.config.render_height)
         with numba_threads(self.config.render_threads):
             out = render_scene(self._sources(self.world.t), cam, background=self.world.scene.background,
-                               sky=self.world.scene.sky)
+                               sky=self.world.scene.sky, backend=self._render_backend)
         return out.rgb_uint8()
 
     # ================================================================== info

@@ -61,7 +61,8 @@ class MorphoSimVectorEnv(VectorEnv):
         kind: the task kind ("track", "reach", "find"); the registered ids set it.
         render_threads: numba threads of the batched render (None: all of numba's threads).
             Each env's own work (skinning, resets) keeps the env's `render_threads` (default 1).
-        backend: the batched render's backend ("cpu", or "gsplat" on a CUDA machine).
+        backend: the batched render's backend ("cpu", or "gsplat" on a CUDA machine); None: the
+            first env's `render_backend` (its sim's `config.render_backend`, "cpu" by default).
         perturbations: one `LanguagePerturbation` keyword dict (schedule, edits, probability,
             max_random_edits) or None per env: env i is stepped through its own
             `LanguagePerturbation`, exactly as `LanguagePerturbation(gym.make(id), **p)` would be,
@@ -84,7 +85,7 @@ class MorphoSimVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
 
     def __init__(self, num_envs: int, kind: str = "track", render_threads: Optional[int] = None,
-                 backend: str = "cpu", perturbations: Optional[Sequence[Optional[Mapping[str, Any]]]] = None,
+                 backend: Optional[str] = None, perturbations: Optional[Sequence[Optional[Mapping[str, Any]]]] = None,
                  env_kwargs: Optional[Sequence[Optional[Mapping[str, Any]]]] = None, **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
@@ -96,8 +97,8 @@ class MorphoSimVectorEnv(VectorEnv):
         creator: Callable[..., gym.Env] = load_env_creator(ENTRY_POINTS[kind])
         self.num_envs = n
         self.render_threads = render_threads
-        self.backend = backend
         self.envs = [creator(**{**kwargs, **(per_env[i] or {})}) for i in range(n)]
+        self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
         self._steppers = [LanguagePerturbation(_Deferred(env, self._pending[i]), **perturbations[i])
                           if perturbations[i] is not None else None for i, env in enumerate(self.envs)]

@@ -26,6 +26,9 @@ _LAZY: dict[str, str] = {
     "BackendUnavailableError": "morphosim_gym.errors",
     "CommandError": "morphosim_gym.errors",
     "EditError": "morphosim_gym.errors",
+    "UnknownBackendError": "morphosim_gym.errors",
+    "LLMConfig": "morphosim_gym.language.llm",
+    "DiffusionConfig": "morphosim_gym.generate.diffusion.backend",
     "Plan": "morphosim_gym.language",
     "parse": "morphosim_gym.language",
     "MorphoSim": "morphosim_gym.pipeline",
@@ -41,8 +44,8 @@ _LAZY: dict[str, str] = {
 }
 
 __all__ = [
-    "MorphoSim", "SimConfig", "GenerationConfig",
-    "BackendUnavailableError", "CommandError", "EditError", "Plan", "parse",
+    "MorphoSim", "SimConfig", "GenerationConfig", "LLMConfig", "DiffusionConfig",
+    "BackendUnavailableError", "CommandError", "EditError", "UnknownBackendError", "Plan", "parse",
     "RenderOutput", "rasterize", "render",
     "Camera", "FeatureDecoder", "GeneratedClip", "Gaussians", "Motion", "Provenance", "Scene4D",
     "SceneFileError", "SceneObject", "export_ply", "load_clip", "load_scene", "read_ply", "save_clip",

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-__all__ = ["CommandError", "EditError", "BackendUnavailableError", "TargetNotFoundError", "AmbiguousTargetError"]
+__all__ = ["CommandError", "EditError", "BackendUnavailableError", "TargetNotFoundError", "AmbiguousTargetError",
+           "UnknownBackendError"]
 
 
 class CommandError(ValueError):
@@ -29,3 +30,8 @@ class TargetNotFoundError(CommandError, EditError):
 class AmbiguousTargetError(CommandError, EditError):
     """An edit target matches objects of different categories about equally well; the message
     asks which one (say "all ..." to edit every match)."""
+
+
+class UnknownBackendError(ValueError):
+    """A backend name (generator, parser, renderer...) that no registry knows, or a
+    ``"module:factory"`` spec naming no factory; the message lists the known names."""

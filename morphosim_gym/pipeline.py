@@ -10,19 +10,27 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
-from .errors import CommandError
+from .errors import CommandError, UnknownBackendError
+from .generate.backends import GENERATORS
 from .generate.compose import GenerationConfig
+from .language.backends import PARSERS
 from .generate.version import GENERATOR_VERSION
 from .scene import GeneratedClip, Scene4D, load_clip, load_scene, save_clip, save_scene
 from .scene.diskcache import load_or_build
 
+if TYPE_CHECKING:      # imported when used: the diffusion settings import torch
+    from .generate.diffusion.backend import DiffusionConfig
+    from .language.llm import LLMConfig
+
 __all__ = ["MorphoSim", "SimConfig", "RECONSTRUCTIONS", "default_cache_dir"]
 
 RECONSTRUCTIONS = ("fit", "oracle")
+RENDER_BACKENDS = ("cpu", "torch", "gsplat")      # `render.api.BACKENDS` (checked equal by the tests)
 
 
 def default_cache_dir() -> Path:
@@ -35,7 +43,10 @@ class SimConfig:
     """Pipeline configuration.
 
     Attributes:
-        generator: clip backend, "procedural" (offline default).
+        generator: clip backend (`generate.backends.GENERATORS`): "procedural" (offline default),
+            "diffusion" (CogVideoX with trajectory attention guidance on the planner's boxes; needs
+            `diffusion` with local weights and ``reconstruction="fit"``), or "module:factory" (imports
+            `module`, calls `factory(config)`; runs that code).
         reconstruction: how a clip becomes a Scene4D: "fit" (default) reconstructs dynamic
             Gaussians, a motion scaffold and a feature field from the clip alone (about two
             minutes on a laptop CPU, cached on disk); "oracle" uses the generator's ground truth
@@ -43,7 +54,15 @@ class SimConfig:
             by their ids).
         reconstruction_config: settings of the "fit" reconstruction.
         generation: clip size, length and detail.
-        render_backend: renderer used for frames ("cpu").
+        render_backend: renderer used for frames, selections and the envs' observations: "cpu"
+            (default), "torch" (reference) or "gsplat" (CUDA).
+        diffusion: settings of the "diffusion" generator (`DiffusionConfig`, or a mapping of its keys:
+            weights_path, device, steps, guidance...); None = its defaults (which name no weights).
+        parser: what parses prompts and edits (`language.backends.PARSERS`): "rules" (offline
+            default), "llm" (an OpenAI-compatible endpoint, `llm`), "auto" ("llm" when `llm` names an
+            endpoint and a model, else "rules"), or "module:factory" (called with `llm`).
+        llm: the endpoint of the "llm" / "auto" parsers (`LLMConfig`, or a mapping of its keys); None =
+            the MORPHOSIM_LLM_* environment.
         cache: cache on disk by content hash: generated clips, and with `reconstruction="oracle"`
             the composed scenes `generate` returns (`.msim` files under `cache_dir/scene/`).
         cache_dir: where; None = `default_cache_dir()`.
@@ -61,12 +80,33 @@ class SimConfig:
     cache: bool = False
     cache_dir: Optional[str] = None
     strict: bool = False
+    diffusion: Optional["DiffusionConfig"] = None
+    parser: str = "rules"
+    llm: Optional["LLMConfig"] = None
 
     def __post_init__(self) -> None:
-        if self.generator != "procedural":
-            raise ValueError(f"Expected generator 'procedural', found {self.generator!r}")
+        GENERATORS.check(self.generator)
+        PARSERS.check(self.parser)
+        if self.render_backend not in RENDER_BACKENDS:
+            raise UnknownBackendError(f"Unknown render backend {self.render_backend!r}; known: "
+                                      f"{', '.join(repr(b) for b in RENDER_BACKENDS)}")
         if self.reconstruction not in RECONSTRUCTIONS:
             raise ValueError(f"Expected reconstruction in {RECONSTRUCTIONS}, found {self.reconstruction!r}")
+        if self.diffusion is not None:
+            from .generate.diffusion.backend import DiffusionConfig
+
+            if isinstance(self.diffusion, Mapping):        # e.g. a YAML section
+                object.__setattr__(self, "diffusion", DiffusionConfig.from_dict(self.diffusion))
+            if not isinstance(self.diffusion, DiffusionConfig):
+                raise ValueError(f"Expected diffusion as a DiffusionConfig or None, found "
+                                 f"{type(self.diffusion).__name__}")
+        if self.llm is not None:
+            from .language.llm import LLMConfig
+
+            if isinstance(self.llm, Mapping):
+                object.__setattr__(self, "llm", LLMConfig.from_dict(self.llm))
+            if not isinstance(self.llm, LLMConfig):
+                raise ValueError(f"Expected llm as an LLMConfig or None, found {type(self.llm).__name__}")
 
 
 class MorphoSim:
@@ -87,19 +127,30 @@ class MorphoSim:
                              f"known: {sorted(asdict(config))}")
         self.config = replace(config, **overrides)
         from .edit import SceneEditor, Selector
-        from .generate.procedural import ProceduralBackend
 
-        self._generator = ProceduralBackend(self.config.generation, self.config.render_backend)
-        self.editor = SceneEditor(Selector(backend=self.config.render_backend))
+        c = self.config
+        self._generator = GENERATORS.create(c.generator, c)
+        if c.reconstruction == "oracle" and getattr(self._generator, "ground_truth", True) is False:
+            raise ValueError(f"Expected reconstruction='fit' with generator {c.generator!r}: its clips carry no "
+                             f"ground truth for reconstruction='oracle'")
+        self.parser = PARSERS.create(c.parser, c.llm)
+        self.editor = SceneEditor(Selector(backend=c.render_backend), parser=self.parser)
+
+    @property
+    def generator(self) -> Any:
+        """The clip generator `SimConfig.generator` names (a `generate.backends.ClipGenerator`)."""
+        return self._generator
 
     # -------------------------------------------------------------- parsing
     def parse(self, text: str, scene: Scene4D | None = None) -> Any:
-        """The plan of a command (see `morphosim_gym.parse`); with `strict` a substitution is a
-        `CommandError`, else a `SubstitutionWarning`."""
-        from .language import parse
-        from .language.substitutions import warn
+        """The plan of a command (see `morphosim_gym.parse`), by the parser `SimConfig.parser` names
+        (the one edits use too); with `strict` a substitution is a `CommandError`, else a
+        `SubstitutionWarning`."""
+        from .language.substitutions import check_strict, warn
 
-        plan = parse(text, scene=scene, strict=self.config.strict)
+        plan = self.parser.parse(text, scene)
+        if self.config.strict:
+            check_strict(plan)
         warn(plan)
         return plan
 
@@ -150,8 +201,12 @@ class MorphoSim:
                                    f"({prompt!r}); use sim.edit(scene, text) for edits")
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
                 raise ValueError(f"Expected seed as a non-negative integer, found {seed!r}")
-            scene = self._cached_oracle_scene(plan, prompt, seed) if self.config.cache else \
-                self._generator.compose(plan, seed, prompt).scene
+            if not hasattr(self._generator, "compose"):      # a generator whose clips carry the ground truth
+                scene = self.reconstruct(self.generate_clip(prompt, seed))
+            elif self.config.cache:
+                scene = self._cached_oracle_scene(plan, prompt, seed)
+            else:
+                scene = self._generator.compose(plan, seed, prompt).scene
         else:
             scene = self.reconstruct(self.generate_clip(prompt, seed))
         return self.apply_follow_ups(scene, plan)
@@ -184,11 +239,15 @@ class MorphoSim:
     def _cache_path(self, kind: str, prompt: str, seed: int, suffix: str = ".mclip") -> Path:
         """Where a clip or scene is cached: a hash of what decides it, the generator's version included."""
         root = Path(self.config.cache_dir) if self.config.cache_dir else default_cache_dir()
-        key = json.dumps({"prompt": prompt, "seed": seed, "generation": asdict(self.config.generation),
-                          "generator": self.config.generator, "version": GENERATOR_VERSION}, sort_keys=True)
+        fields = {"prompt": prompt, "seed": seed, "generation": asdict(self.config.generation),
+                  "generator": self.config.generator, "version": GENERATOR_VERSION}
+        settings = getattr(self._generator, "cache_settings", None)
+        if settings is not None:                      # e.g. the diffusion model's weights and steps
+            fields["generator_settings"] = settings()
+        key = json.dumps(fields, sort_keys=True, default=str)
         digest = hashlib.sha256(key.encode()).hexdigest()[:24]
         return root / kind / f"{digest}{suffix}"
 
     def __repr__(self) -> str:
         c = self.config
-        return f"MorphoSim(generator={c.generator!r}, reconstruction={c.reconstruction!r})"
+        return f"MorphoSim(generator={c.generator!r}, reconstruction={c.reconstruction!r}, parser={c.parser!r})"

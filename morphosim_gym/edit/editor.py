@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import CommandError, EditError
-from ..language import parse
+from ..language.backends import Parser, RulesParser
 from ..language.plan import CameraOp, EditOp, ExtractOp, RecolorOp, RedirectOp, RemoveOp, ReverseOp, SpeedOp, StopOp
 from ..scene import Provenance, Scene4D
 from ..scene.camera import camera_path
@@ -34,10 +34,16 @@ class SceneEditor:
     Args:
         selector: how targets become Gaussian selections (default `Selector()`; its cache is
             what makes repeated edits of one target fast).
+        parser: what turns the edit text into a plan (a `language.backends.Parser`; default the
+            rule parser). `MorphoSim` passes the one `SimConfig.parser` names.
     """
 
-    def __init__(self, selector: Selector | None = None) -> None:
+    def __init__(self, selector: Selector | None = None, parser: Parser | None = None) -> None:
         self.selector = selector or Selector()
+        if parser is not None and not isinstance(parser, Parser):
+            raise ValueError(f"Expected parser with a parse(text, scene, require_scene=...) method, found "
+                             f"{type(parser).__name__}")
+        self.parser = parser if parser is not None else RulesParser()
 
     def edit(self, scene: Scene4D, text: str) -> Scene4D:
         """Apply an edit command; returns a new scene whose `undo()` is `scene`.
@@ -50,7 +56,7 @@ class SceneEditor:
         """
         if not isinstance(scene, Scene4D):
             raise ValueError(f"Expected a Scene4D to edit, found {type(scene).__name__}")
-        plan = parse(text, scene=scene)
+        plan = self.parser.parse(text, scene)
         if plan.mode != "edit":
             raise CommandError(f"Expected an edit command (e.g. 'make the {scene.objects[-1].name} blue'), found a "
                                f"description of a new scene: {text!r}; use MorphoSim.generate for that")

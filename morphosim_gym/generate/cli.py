@@ -20,15 +20,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("prompt")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size", type=int, default=128, help="frame width and height in pixels")
-    p.add_argument("--frames", type=int, default=49)
-    p.add_argument("--fps", type=float, default=8.0)
+    p.add_argument("--size", type=int, default=None,
+                   help="frame width and height in pixels (default 128; diffusion: its config's, 720x480)")
+    p.add_argument("--frames", type=int, default=None, help="clip frames (default 49, or the diffusion config's)")
+    p.add_argument("--fps", type=float, default=None, help="frame rate (default 8, or the diffusion config's)")
     p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
     p.add_argument("--strict", action="store_true",
                    help="fail (exit 2) instead of substituting: a noun outside the library, a repaired misspelling")
     p.add_argument("--reconstruct", action="store_true",
                    help="write the scene reconstructed from the clip (about two minutes) instead of the "
-                        "generator's ground truth")
+                        "generator's ground truth (a generator without one, e.g. diffusion, writes no scene "
+                        "without this flag)")
+    p.add_argument("--generator", default="procedural",
+                   help="clip generator: procedural (default), diffusion (local CogVideoX weights, see "
+                        "--weights), or module:factory (imports and runs that module)")
+    p.add_argument("--weights", default=None,
+                   help="diffusion: local directory of a diffusers CogVideoX pipeline (never downloaded)")
+    p.add_argument("--diffusion-config", default=None,
+                   help="diffusion: a YAML file of DiffusionConfig keys (device, num_inference_steps, guidance...)")
+    p.add_argument("--steps", type=int, default=None, help="diffusion: denoising steps (num_inference_steps)")
+    _parser_option(p)
     p.set_defaults(func=_generate)
 
     p = sub.add_parser("render", help="render a scene file to a video (optionally orbiting it)")
@@ -46,7 +57,51 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("text")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--novel-yaw", type=float, default=30.0, help="yaw of the novel view, degrees")
+    _parser_option(p)
     p.set_defaults(func=_edit)
+
+
+def _parser_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--parser", default="rules",
+                   help="command parser: rules (offline default), llm (the MORPHOSIM_LLM_* environment), auto, "
+                        "or module:factory")
+
+
+def _diffusion_config(args: argparse.Namespace) -> object:
+    """The `DiffusionConfig` of the generate flags (a YAML file, then --weights, --size, --frames,
+    --fps and --steps over it)."""
+    from ..config_yaml import load_yaml_file
+    from .diffusion.backend import DiffusionConfig
+
+    data = load_yaml_file(args.diffusion_config) if args.diffusion_config else {}
+    if not isinstance(data, dict):
+        raise ValueError(f"Expected a mapping of diffusion keys in {args.diffusion_config}, found "
+                         f"{type(data).__name__}")
+    data = dict(data.get("diffusion", data))
+    flags = {"weights_path": args.weights, "height": args.size, "width": args.size, "num_frames": args.frames,
+             "fps": args.fps, "num_inference_steps": args.steps}
+    data.update({k: v for k, v in flags.items() if v is not None})
+    return DiffusionConfig.from_dict(data)
+
+
+def _sim_config(args: argparse.Namespace) -> object:
+    """The `SimConfig` of the generate flags."""
+    from ..pipeline import SimConfig
+    from .compose import GenerationConfig
+
+    defaults = GenerationConfig()
+    size = {"width": args.size, "height": args.size, "num_frames": args.frames, "fps": args.fps}
+    generation = GenerationConfig(**{k: getattr(defaults, k) if v is None else v for k, v in size.items()})
+    diffusion = _diffusion_config(args) if args.generator == "diffusion" else None
+    given = [flag for flag, v in (("--weights", args.weights), ("--diffusion-config", args.diffusion_config),
+                                  ("--steps", args.steps)) if v is not None]
+    if diffusion is None and given:
+        raise ValueError(f"Expected {', '.join(given)} only with --generator diffusion, found --generator "
+                         f"{args.generator}")
+    # a generator other than the procedural one may have no ground truth: fit when asked, else keep its clip
+    reconstruction = "oracle" if args.generator == "procedural" and not args.reconstruct else "fit"
+    return SimConfig(generator=args.generator, generation=generation, reconstruction=reconstruction,
+                     diffusion=diffusion, parser=args.parser, strict=args.strict)
 
 
 def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
@@ -71,33 +126,63 @@ def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:
 def _generate(args: argparse.Namespace) -> int:
     from ..pipeline import MorphoSim
     from ..scene import save_clip, save_scene
-    from .compose import GenerationConfig
 
     out = Path(args.out)
-    sim = MorphoSim(generation=GenerationConfig(width=args.size, height=args.size, num_frames=args.frames, fps=args.fps),
-                    reconstruction="fit" if args.reconstruct else "oracle", strict=args.strict)
+    sim = MorphoSim(_sim_config(args))
     start = time.perf_counter()
     plan = sim.parse(args.prompt)               # errors before anything is written
     clip = sim.generate_clip(args.prompt, seed=args.seed)
-    scene = sim.apply_follow_ups(sim.reconstruct(clip), plan)
+    scene = _scene_of(sim, clip, plan, args.reconstruct)
     seconds = time.perf_counter() - start
+    summary = _summary(args, sim, plan, clip, scene, seconds)
     with tempfile.TemporaryDirectory(prefix=".generate-", dir=out.parent if out.parent.exists() else None) as tmp:
         stage = Path(tmp)
         write_video(list(clip.frames), stage / f"clip.{args.format}", clip.fps)
-        save_scene(scene, stage / "scene.msim")
+        if scene is not None:
+            save_scene(scene, stage / "scene.msim")
         save_clip(clip, stage / "clip.mclip")
-        summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
-                   "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
-                   "objects": [o.to_dict() for o in scene.objects], "setting": clip.info.get("setting"),
-                   "edits": list(scene.history), "plan": plan.to_dict(), "scene_id": scene.content_hash(),
-                   "trajectories": clip.info.get("trajectories", {})}
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
         out.mkdir(parents=True, exist_ok=True)
         for f in stage.iterdir():
             shutil.move(str(f), out / f.name)
     print(json.dumps({k: summary[k] for k in ("prompt", "seed", "seconds", "setting", "edits")}))
-    print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
+    if scene is None:
+        skipped = f" (follow-up edits {[f.text for f in plan.then]} need a scene)" if plan.then else ""
+        print(f"wrote {out}/clip.{args.format}, clip.mclip, summary.json; no scene.msim: the {sim.config.generator} "
+              f"clip has no ground truth, pass --reconstruct to fit one{skipped}")
+    else:
+        print(f"wrote {out}/clip.{args.format}, scene.msim, clip.mclip, summary.json")
     return 0
+
+
+def _scene_of(sim: object, clip: object, plan: object, reconstruct: bool) -> object:
+    """The scene `morphosim generate` writes: fitted (--reconstruct), the generator's ground truth, or
+    None for a clip without one; follow-up edits applied."""
+    if reconstruct or sim.config.reconstruction == "oracle":
+        scene = sim.reconstruct(clip)
+    elif clip.ground_truth is not None:
+        scene = clip.ground_truth
+    else:
+        return None
+    return sim.apply_follow_ups(scene, plan)
+
+
+def _summary(args: argparse.Namespace, sim: object, plan: object, clip: object, scene: object,
+             seconds: float) -> dict:
+    """summary.json of `morphosim generate` (objects from the clip's labels when there is no scene)."""
+    objects = [{"id": int(i), "name": name} for i, name in sorted(clip.labels.items())] if scene is None \
+        else [o.to_dict() for o in scene.objects]
+    summary = {"prompt": args.prompt, "seed": args.seed, "seconds": round(seconds, 3),
+               "generator": sim.config.generator, "parser": sim.config.parser,
+               "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
+               "objects": objects, "setting": clip.info.get("setting"),
+               "edits": [] if scene is None else list(scene.history), "plan": plan.to_dict(),
+               "scene_id": None if scene is None else scene.content_hash(),
+               "trajectories": clip.info.get("trajectories", {})}
+    guidance = clip.info.get("guidance")
+    if guidance:
+        summary["guidance_energy"] = guidance.get("energy")
+    return summary
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -128,7 +213,7 @@ def _edit(args: argparse.Namespace) -> int:
     from ..scene import load_scene, save_scene
 
     scene = load_scene(args.scene)
-    sim = MorphoSim()
+    sim = MorphoSim(parser=args.parser)
     start = time.perf_counter()
     edited = sim.edit(scene, args.text)
     seconds = time.perf_counter() - start

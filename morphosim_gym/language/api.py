@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import CommandError
+from ..errors import CommandError, UnknownBackendError
 from .plan import Plan
-from .rules import parse_rules
 from .substitutions import check_strict
 
 __all__ = ["parse"]
@@ -26,7 +25,7 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
             inspected without a scene; pronouns with nothing to refer to always raise.
         backend: "rules" (offline default), "llm" (an OpenAI-compatible chat endpoint, see
             `morphosim_gym.language.llm`), or "auto" ("llm" when an endpoint is configured, else
-            "rules").
+            "rules"), or a ``"module:factory"`` parser (see `language.backends`).
         llm: an `LLMConfig` for the "llm"/"auto" backends (default: from the environment).
         strict: raise `CommandError` when the plan would substitute anything for what the text asks
             (a noun outside the library grounded to the nearest one, a repaired misspelling; see
@@ -39,20 +38,13 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
     Raises:
         CommandError: the text could not be turned into a valid plan; no partial plan is returned.
     """
-    plan = _parse(text, scene, require_scene, backend, llm)
+    from .backends import PARSERS
+
+    try:
+        parser = PARSERS.create(PARSERS.check(backend), llm)
+    except UnknownBackendError as e:
+        raise CommandError(f"Expected backend {PARSERS.known()}, found {backend!r}") from e
+    plan = parser.parse(text, scene, require_scene=require_scene)
     if strict:
         check_strict(plan)
     return plan
-
-
-def _parse(text: str, scene: Any, require_scene: bool, backend: str, llm: Any) -> Plan:
-    if backend == "rules":
-        return parse_rules(text, scene, require_scene)
-    if backend in ("llm", "auto"):
-        from .llm import LLMConfig, parse_llm
-
-        config = llm if llm is not None else LLMConfig.from_env()
-        if backend == "auto" and not config.configured:
-            return parse_rules(text, scene, require_scene)
-        return parse_llm(text, scene, config=config, require_scene=require_scene)
-    raise CommandError(f"Expected backend 'rules', 'llm' or 'auto', found {backend!r}")

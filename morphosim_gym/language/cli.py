@@ -13,8 +13,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("parse", help="parse a command into a plan and print it as JSON")
     p.add_argument("text", nargs="+", help="the command (quote it, or pass its words)")
     p.add_argument("--scene", help="a scene file (.msim) whose objects edit targets must resolve to")
-    p.add_argument("--backend", choices=("rules", "llm", "auto"), default="rules",
-                   help="rules (offline default), llm (MORPHOSIM_LLM_* environment), or auto")
+    p.add_argument("--backend", default="rules",
+                   help="rules (offline default), llm (MORPHOSIM_LLM_* environment), auto, or module:factory "
+                        "(imports and runs that module)")
     p.add_argument("--require-scene", action="store_true", help="fail on an edit with no scene to apply to")
     p.add_argument("--compact", action="store_true", help="one-line JSON")
     p.add_argument("--strict", action="store_true",

@@ -4,6 +4,8 @@ local weights; the procedural generator is the offline default.
 
 Public names:
     `DiffusionClipBackend`, `DiffusionConfig`: text + trajectory boxes -> `GeneratedClip`.
+    `planned.PlannedDiffusionGenerator`: the same behind the `ClipGenerator` protocol (plan, seed,
+        prompt -> clip, its boxes from the trajectory planner); `SimConfig(generator="diffusion")`.
     `GuidanceTarget`: motion words + one normalised box per video frame (from the planner).
     `GuidanceConfig`, `guided_sample`: the guided denoising loop for any CogVideoX transformer.
     `PriorEstimators`, `DefaultPriorEstimators`: pluggable depth / masks / tracks.

@@ -61,6 +61,8 @@ class DiffusionConfig:
         negative_prompt: text for the unconditional branch.
         max_sequence_length: text tokens (None: the transformer's max_text_seq_length).
         fov_y_deg, camera_eye, camera_target: the default fixed camera (see the module docstring).
+            `SimConfig(generator="diffusion")` (`planned.PlannedDiffusionGenerator`) plans with
+            fov_y_deg and uses the planner's camera instead of camera_eye / camera_target.
         vae_tiling: decode in tiles (saves GPU memory at 720p).
         guidance: trajectory attention guidance (`GuidanceConfig`).
     """
