@@ -145,7 +145,7 @@ def insert_object(scene: Scene4D, anchor_ids: Sequence[int], category: str, colo
     view = centre - cam.position
     view[2] = 0.0
     view /= max(np.linalg.norm(view), 1e-9)
-    size = width
+    size, height = width, None
     if relation == "next_to":
         spot = centre + 1.2 * width * right
     elif relation == "behind":
@@ -153,16 +153,17 @@ def insert_object(scene: Scene4D, anchor_ids: Sequence[int], category: str, colo
     elif relation == "in_front":
         spot = centre - 1.5 * width * view
     elif relation == "occluding":
-        spot = centre + 0.45 * (cam.position - centre)            # between the camera and the anchor
-        spot = np.array([spot[0], spot[1], centre[2]])
-        size = 1.4 * width * 0.55                                  # nearer the camera: looks ~1.4x as wide
+        # on the line of sight from the generation camera to the anchor, 45% of the way to the camera (so
+        # it looks ~1.8x as large as its width there), standing on the anchor's floor up past that line
+        spot = centre + 0.45 * (cam.position - centre)
+        size = 0.8 * width
+        height = max(float(spot[2] - floor) + 0.6 * size, size)
     else:
         raise ValueError(f"Expected relation in ('next_to', 'occluding', 'behind', 'in_front'), found {relation!r}")
     new_id = max([o.id for o in scene.objects], default=-1) + 1
     rng = np.random.default_rng([new_id, len(category), 0x1A5E])
-    new = shape_gaussians(category, size, color, INSERT_BUDGET, rng, new_id, scene.gaussians.feature_dim)
-    z0 = floor if relation != "occluding" else max(floor, centre[2] - 0.5 * size * (2.5 if category == "bottle" else 1))
-    new = new.replace(means=new.means + np.array([spot[0], spot[1], z0]))
+    new = shape_gaussians(category, size, color, INSERT_BUDGET, rng, new_id, scene.gaussians.feature_dim, height)
+    new = new.replace(means=new.means + np.array([spot[0], spot[1], floor]))
     obj = SceneObject(new_id, category, category, None if color is None else tuple(float(x) for x in color))
     keep = np.ones(len(scene.gaussians), dtype=bool)
     return _append(scene, new, -1, scene.objects + (obj,), keep, label)

@@ -35,17 +35,21 @@ SHAPE_OF: dict[str, tuple[str, dict, float]] = {
 
 
 def shape_gaussians(category: str, width: float, color: tuple[float, float, float] | None, n: int,
-                    rng: np.random.Generator, object_id: int, feature_dim: int = 0) -> Gaussians:
-    """`n` Gaussians of a `category` object `width` metres across (standing on z = 0), coloured `color`
-    (shaded by the scene sun). Unknown categories get a box."""
+                    rng: np.random.Generator, object_id: int, feature_dim: int = 0,
+                    height: float | None = None) -> Gaussians:
+    """`n` Gaussians of a `category` object `width` metres across (standing on z = 0; `height` metres
+    tall, default the category's proportions), coloured `color` (shaded by the scene sun). Unknown
+    categories get a box."""
     if not (np.isfinite(width) and width > 0):
         raise ValueError(f"Expected an object width > 0, found {width}")
     shape, params, aspect = SHAPE_OF.get(category, SHAPE_OF["box"])
     surf = sample_shape(shape, n, rng, **params)
     pts = surf.points - np.array([0.0, 0.0, surf.points[:, 2].min()])
     pts = pts / max(float(np.ptp(pts[:, 0])), 1e-9)             # unit width
-    pts[:, 2] *= aspect
     pts *= width
+    if height is not None:
+        aspect = height / width
+    pts[:, 2] *= aspect
     rgb = np.asarray(color if color is not None else DEFAULT_COLOR, dtype=np.float64)
     shade = AMBIENT + DIFFUSE * np.clip(surf.normals @ LIGHT_DIR, 0.0, 1.0)
     colors = np.clip(rgb[None, :] * shade[:, None], 0.0, 1.0)

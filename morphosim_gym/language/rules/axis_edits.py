@@ -58,7 +58,7 @@ _SENSOR_WORDS = {"noise": "noise", "noisy": "noise", "grain": "noise", "grainy":
 _SENSOR_NOUNS = ("camera", "cameras", "image", "images", "video", "view", "picture", "pictures", "sensor", "frames",
                  "observations", "lens")
 _AMOUNTS = {"little": 0.25, "bit": 0.25, "slight": 0.25, "slightly": 0.25, "some": 0.5, "lot": 0.9, "heavy": 0.9,
-            "heavily": 0.9, "strong": 0.9, "strongly": 0.9, "much": 0.9}
+            "heavily": 0.9, "strong": 0.9, "strongly": 0.9, "much": 0.9, "alot": 0.9}
 _SCENE_WORDS = ("scene", "everything", "world", "whole", "setting", "background")
 _UNITS = {"m": 1.0, "metre": 1.0, "metres": 1.0, "meter": 1.0, "meters": 1.0, "cm": 0.01, "centimetres": 0.01,
           "centimeters": 0.01, "centimetre": 0.01, "centimeter": 0.01}
