@@ -48,9 +48,9 @@ def power_chart(path: Path, rows: list[PowerSummary], metric: str = "return") ->
         return False
     plt = _pyplot()
     policies = list(dict.fromkeys(r.policy for r in rows))
-    fig, axes = plt.subplots(1, len(policies), figsize=(4 + 0.35 * len(rows) / len(policies) * 1.5 * len(policies),
-                                                        3.6), squeeze=False)
-    for ax, policy in zip(axes[0], policies):
+    per = max(len(rows) // len(policies), 1)
+    fig, axes = plt.subplots(len(policies), 1, figsize=(max(6.0, 2 + 0.38 * per), 3.4 * len(policies)), squeeze=False)
+    for ax, policy in zip(axes[:, 0], policies):
         mine = [r for r in rows if r.policy == policy]
         x = np.arange(len(mine))
         ax.bar(x - 0.2, [r.paired_width for r in mine], 0.4, label="paired")

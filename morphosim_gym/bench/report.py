@@ -86,8 +86,9 @@ def _power_rows(rows: list[PowerSummary]) -> list[str]:
            "per paired one | episodes pairing saves |", "|---|---|---:|---:|---:|---:|---:|"]
     for p in rows:
         saved = "n/a" if p.saved != p.saved else f"{100 * p.saved:.0f}%"
+        ratio = _num(p.episode_ratio)
         out.append(f"| {p.perturbation} | {p.metric} | {p.pairs} | {_num(p.paired_width)} | "
-                   f"{_num(p.unpaired_width)} | {_num(p.episode_ratio)}× | {saved} |")
+                   f"{_num(p.unpaired_width)} | {ratio if ratio == 'n/a' else ratio + '×'} | {saved} |")
     return out
 
 
