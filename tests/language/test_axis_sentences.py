@@ -86,7 +86,9 @@ def test_every_new_kind_has_a_sentence_and_a_handler():
 @pytest.mark.parametrize("text, op", [("make the ball blue", "recolor"), ("add some blue to the ball", "recolor"),
                                       ("turn the ball red", "recolor"), ("zoom in", "camera"),
                                       ("move the ball to the left", "redirect"), ("make the ball move faster", "speed"),
-                                      ("delete the cube", "remove"), ("make the sky blue", None)])
+                                      ("delete the cube", "remove"), ("drop the ball", "remove"),
+                                      ("add a touch of red to the cube", "recolor"),
+                                      ("move everything to the left", "redirect"), ("make the sky blue", None)])
 def test_earlier_edit_sentences_keep_their_meaning(scene, text, op):
     if op is None:                                       # no sky object: still an error, not a sky swap
         with pytest.raises(ms.CommandError):

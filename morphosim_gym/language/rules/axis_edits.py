@@ -81,7 +81,7 @@ def _color(toks: Sequence[str], i: int) -> tuple[ColorSpec | None, int]:
 
 def _new_object(toks: Sequence[str], i: int) -> tuple[str, ColorSpec | None, int] | None:
     """ "a [colour] cube" at i: (category, colour, index after), or None when no known noun follows."""
-    if i < len(toks) and toks[i] in ("a", "an", "another", "one", "some", "the"):
+    if i < len(toks) and toks[i] in ("a", "an", "another", "one", "some"):     # a new object: never "the"
         i += 1
     color, i = _color(toks, i)
     if i >= len(toks):
@@ -205,7 +205,7 @@ def _relation(toks: Sequence[str], j: int) -> tuple[str, int] | None:
     return None
 
 
-@AXIS_READERS.on("add", "put", "place", "insert", "drop")
+@AXIS_READERS.on("add", "put", "place", "insert")
 def _insert(reader: Any, toks: list[str]) -> list[dict] | None:
     new = _new_object(toks, 1)
     if new is None:
