@@ -26,7 +26,8 @@ from typing import Any
 from gymnasium.envs.registration import register, registry
 
 __all__ = ["ENV_IDS", "ENTRY_POINTS", "env_id_of", "vector_entry_of", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv",
-           "MorphoSimVectorEnv", "EnvConfig", "LanguagePerturbation", "RGBObservation", "make_vec", "register_task"]
+           "MorphoSimVectorEnv", "EnvConfig", "LanguagePerturbation", "RGBObservation", "SensorEffects", "AxisRandomization", "make_vec",
+           "register_task"]
 
 ENTRY_POINTS = {
     "track": "morphosim_gym.envs.track:TrackEnv",
@@ -64,6 +65,8 @@ _LAZY = {
     "EnvConfig": "morphosim_gym.envs.config",
     "LanguagePerturbation": "morphosim_gym.envs.wrappers",
     "RGBObservation": "morphosim_gym.envs.wrappers",
+    "SensorEffects": "morphosim_gym.envs.sensor",
+    "AxisRandomization": "morphosim_gym.envs.randomize",
     "make_vec": "morphosim_gym.envs.vector",
     "MorphoSimVectorEnv": "morphosim_gym.envs.native_vector",
     "register_task": "morphosim_gym.envs.vector",

@@ -22,7 +22,7 @@ from morphosim_gym.scene import Scene4D
 from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
 
 from .config import RENDER_MODES, EnvConfig, env_signature, make_sim, render_backend_of
-from .edits import apply_edit
+from .edits import apply_edit, view_camera_option
 from .options import ResetOptions
 from .scenes import SceneChooser, SceneSource
 from .snapshot import EnvSnapshot, restore_snapshot, take_snapshot
@@ -126,11 +126,13 @@ class MorphoSimEnv(gym.Env):
         policy = opts.on_edit_error or self.config.on_edit_error
         self._edits, self._edit_errors = [], []
         world = SceneWorld(scene, target)          # geometry (target size, focus) from the unedited scene
+        unedited = scene
         for text in opts.edits:
             scene = self._edit(scene, text, policy)
         world.set_scene(scene)
         self._world, self._step_count = world, 0
-        self._task.initialize_episode(world, self._rig, rng, opts.camera)
+        camera = view_camera_option(unedited, scene, opts.camera, self._task.params.get("fov_y_deg"))
+        self._task.initialize_episode(world, self._rig, rng, camera)
         self._episode = {"prompt": request.prompt, "scene_seed": scene_seed, "target": target.name,
                          "target_id": target.id, "instruction": self._task.instruction(description),
                          "edit_policy": policy}

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any, Mapping, Optional
 
 from morphosim_gym.errors import CommandError, EditError
 from morphosim_gym.scene import Scene4D
 
-__all__ = ["apply_edit"]
+__all__ = ["apply_edit", "view_camera_option"]
 
 
 def apply_edit(sim: Any, scene: Scene4D, text: str, policy: str) -> tuple[Scene4D, Optional[str]]:
@@ -28,3 +28,16 @@ def apply_edit(sim: Any, scene: Scene4D, text: str, policy: str) -> tuple[Scene4
         except Exception:  # an error type with a different constructor: raise it as it is
             raise exc
         raise err from exc
+
+
+def view_camera_option(before: Scene4D, after: Scene4D, camera: Mapping[str, Any],
+                       default_fov: Optional[float]) -> dict[str, Any]:
+    """The reset `camera` option once the reset edits have run: a field-of-view edit of the scene's
+    generation camera ("widen the field of view") scales the task's start field of view by the same
+    ratio (unless the option sets one). A moved generation camera needs nothing here: the tasks place
+    the rig from the edited scene's camera."""
+    out = dict(camera)
+    ratio = after.camera.fov_y_deg / before.camera.fov_y_deg
+    if "fov_y_deg" not in out and default_fov is not None and abs(ratio - 1.0) > 1e-9:
+        out["fov_y_deg"] = float(min(max(default_fov * ratio, 1.0), 170.0))
+    return out

@@ -35,14 +35,16 @@ import numpy as np
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
-def make_env(pool_seed: int, pool: int, size: int):
+def make_env(pool_seed: int, pool: int, size: int, randomize: str | None = None):
     import gymnasium as gym
 
     import morphosim_gym  # noqa: F401  (registers the ids)
-    from morphosim_gym.envs import RGBObservation
+    from morphosim_gym.envs import AxisRandomization, RGBObservation
 
     def thunk():
         env = gym.make("MorphoSim/Track-v0", width=size, height=size, scene_pool=pool, pool_seed=pool_seed)
+        if randomize:                    # perturbation axes drawn per episode (tasks/randomization/NAME.yaml)
+            env = AxisRandomization(env, randomize)
         return RGBObservation(env)
 
     return thunk
@@ -95,6 +97,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=RESULTS)
     ap.add_argument("--replot", action="store_true", help="only redraw the plot from saved results")
+    ap.add_argument("--randomize", default=None, metavar="NAME",
+                    help="train under axis randomisation (a tasks/randomization name such as 'track', or a YAML path)")
     args = ap.parse_args()
     if args.replot:
         replot(args.out)
@@ -113,7 +117,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
 
-    venv = VecMonitor(DummyVecEnv([make_env(0, args.pool, args.size) for _ in range(args.n_envs)]),
+    venv = VecMonitor(DummyVecEnv([make_env(0, args.pool, args.size, args.randomize) for _ in range(args.n_envs)]),
                       info_keywords=("success", "centred_fraction"))
     if args.frame_stack > 1:
         venv = VecFrameStack(venv, args.frame_stack)          # the last frames, so the policy sees motion
@@ -169,6 +173,7 @@ def main() -> None:
 
     result = {
         "env": "MorphoSim/Track-v0", "obs": f"rgb {args.size}x{args.size} only (RGBObservation)",
+        "randomize": args.randomize,
         "algo": "stable-baselines3 PPO CnnPolicy (NatureCNN)",
         "frame_stack": args.frame_stack,
         "ppo": {"n_envs": args.n_envs, "n_steps": 128, "batch_size": 256, "n_epochs": 4, "learning_rate": 3e-4,

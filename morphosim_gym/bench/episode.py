@@ -19,6 +19,7 @@ from typing import Any, Optional
 
 import numpy as np
 
+from morphosim_gym.envs.sensor import SensorEffects
 from morphosim_gym.envs.wrappers import LanguagePerturbation
 
 from ..policies import policy_for_episode
@@ -215,7 +216,8 @@ class EpisodeRunner:
         options: dict[str, Any] = {"prompt": ep.request.prompt, "scene_seed": ep.scene_seed,
                                    "target": ep.request.target or None, "camera": camera}
         try:
-            env = LanguagePerturbation(env, schedule={pert.at: edits} if edits else {})   # the one edit scheduler
+            env = LanguagePerturbation(SensorEffects(env),                             # the one edit scheduler
+                                       schedule={pert.at: edits} if edits else {})
         except ValueError as exc:
             raise _Failure("perturbation", _text(exc)) from None
         try:

@@ -9,10 +9,10 @@ import numpy as np
 
 from .episode import EpisodeKey
 from .layout import frames_path, slug
-from .stats import ConditionSummary, Interval
+from .stats import ConditionSummary, Interval, PowerSummary
 from .suite import BASE, Suite
 
-__all__ = ["bar_chart", "frame_strips"]
+__all__ = ["bar_chart", "frame_strips", "power_chart"]
 
 
 def _pyplot():
@@ -38,6 +38,30 @@ def _bars(ax, conditions: list[str], policies: list[str], values: dict, title: s
     ax.axhline(0.0, color="black", linewidth=0.6)
     ax.set_xticks(x, conditions, rotation=35, ha="right", fontsize=8)
     ax.set_title(title, fontsize=9)
+
+
+def power_chart(path: Path, rows: list[PowerSummary], metric: str = "return") -> bool:
+    """Paired and unpaired 95% interval widths of each condition's difference to the base (one panel
+    per policy, `metric` only). Returns False when there is nothing to draw."""
+    rows = [r for r in rows if r.metric == metric and r.pairs > 0]
+    if not rows:
+        return False
+    plt = _pyplot()
+    policies = list(dict.fromkeys(r.policy for r in rows))
+    per = max(len(rows) // len(policies), 1)
+    fig, axes = plt.subplots(len(policies), 1, figsize=(max(6.0, 2 + 0.38 * per), 3.4 * len(policies)), squeeze=False)
+    for ax, policy in zip(axes[:, 0], policies):
+        mine = [r for r in rows if r.policy == policy]
+        x = np.arange(len(mine))
+        ax.bar(x - 0.2, [r.paired_width for r in mine], 0.4, label="paired")
+        ax.bar(x + 0.2, [r.unpaired_width for r in mine], 0.4, label="unpaired")
+        ax.set_xticks(x, [r.perturbation for r in mine], rotation=35, ha="right", fontsize=8)
+        ax.set_title(f"{policy}: 95% CI width of Δ {metric} (same episodes)", fontsize=9)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
 
 
 def bar_chart(path: Path, summaries: list[ConditionSummary], policies: list[str], conditions: list[str]) -> bool:

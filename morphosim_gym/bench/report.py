@@ -9,7 +9,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Optional
 
-from .stats import ConditionSummary, Interval
+from .stats import ConditionSummary, Interval, PowerSummary, power
 from .store import atomic_write_bytes
 from .suite import BASE, Suite
 
@@ -75,8 +75,38 @@ def _results_rows(summaries: list[ConditionSummary]) -> list[str]:
     return rows
 
 
+def _num(v: float, digits: int = 3) -> str:
+    if v != v:            # nan
+        return "n/a"
+    return "∞" if v == float("inf") else f"{v:.{digits}g}"
+
+
+def _power_rows(rows: list[PowerSummary]) -> list[str]:
+    out = ["| condition | metric | pairs | paired 95% CI width | unpaired 95% CI width | unpaired episodes needed "
+           "per paired one | episodes pairing saves |", "|---|---|---:|---:|---:|---:|---:|"]
+    for p in rows:
+        saved = "n/a" if p.saved != p.saved else f"{100 * p.saved:.0f}%"
+        ratio = _num(p.episode_ratio)
+        out.append(f"| {p.perturbation} | {p.metric} | {p.pairs} | {_num(p.paired_width)} | "
+                   f"{_num(p.unpaired_width)} | {ratio if ratio == 'n/a' else ratio + '×'} | {saved} |")
+    return out
+
+
+def _power_section(power_rows: list[PowerSummary], policies: list[str]) -> list[str]:
+    lines = ["", "## Statistical power: paired vs unpaired design", "",
+             "The same episodes analysed two ways: paired (each perturbed episode against the base episode of its "
+             "seed, the suite's design) and unpaired (the two groups resampled independently, as if the seeds "
+             "differed). Interval widths shrink as 1/√n, so an unpaired design needs (unpaired / paired width)² "
+             "times the episodes for the paired width; 'saves' is 1 − (paired / unpaired)². ∞: the paired "
+             "differences do not vary at all; n/a: neither design sees any variation."]
+    for policy in policies:
+        lines += ["", f"Policy `{policy}`:", ""]
+        lines += _power_rows([p for p in power_rows if p.policy == policy])
+    return lines
+
+
 def _markdown(suite: Suite, policies: list[str], records: list[dict], summaries: list[ConditionSummary],
-              run: dict, figures: dict[str, str]) -> str:
+              run: dict, figures: dict[str, str], power_rows: list[PowerSummary]) -> str:
     lines = [f"# Counterfactual robustness: suite `{suite.name}` ({suite.env_id})", ""]
     if suite.description:
         lines += [suite.description.strip(), ""]
@@ -92,6 +122,7 @@ def _markdown(suite: Suite, policies: list[str], records: list[dict], summaries:
     for policy in policies:
         lines += ["", f"## Policy `{policy}`", ""]
         lines += _results_rows([s for s in summaries if s.policy == policy])
+    lines += _power_section(power_rows, policies)
     if figures:
         lines += ["", "## Plots", ""]
         for title, name in figures.items():
@@ -113,18 +144,22 @@ def _markdown(suite: Suite, policies: list[str], records: list[dict], summaries:
 def write_outputs(out: Path, suite: Suite, policies: list[str], records: list[dict],
                   summaries: list[ConditionSummary], run: dict[str, Any]) -> None:
     """Write results.json, results.csv, the plots and report.md into `out`."""
-    from .plots import bar_chart, frame_strips
+    from .plots import bar_chart, frame_strips, power_chart
 
+    power_rows = power(records, policies, [c.name for c in suite.conditions])
     data = {"suite": _suite_dict(suite), "policies": policies, "run": run,
-            "summary": [s.as_dict() for s in summaries], "episodes": records}
+            "summary": [s.as_dict() for s in summaries], "power": [p.as_dict() for p in power_rows],
+            "episodes": records}
     atomic_write_bytes(out / "results.json", (json.dumps(data, indent=1, sort_keys=True) + "\n").encode())
     atomic_write_bytes(out / "results.csv", _csv(records))
     figures: dict[str, str] = {}
     conditions = [c.name for c in suite.conditions]
     if bar_chart(out / "success.png", summaries, policies, conditions):
         figures["Success rate and paired difference to the base (95% bootstrap intervals)"] = "success.png"
+    if power_chart(out / "power.png", power_rows):
+        figures["Statistical power: paired against unpaired interval widths on the same episodes"] = "power.png"
     for policy in policies:
         name = frame_strips(out, suite, policy)
         if name:
             figures[f"Frames of seed {suite.seed}, policy `{policy}`: base and each perturbation"] = name
-    atomic_write_bytes(out / "report.md", _markdown(suite, policies, records, summaries, run, figures).encode())
+    atomic_write_bytes(out / "report.md", _markdown(suite, policies, records, summaries, run, figures, power_rows).encode())

@@ -4,6 +4,12 @@ The paired difference of a perturbation is taken seed by seed against the base e
 same seed and policy (both must have run without error), and its 95% interval is the
 percentile bootstrap over seeds (resampling pairs, so the pairing is kept). Resampling uses a
 fixed generator: a report is reproducible from its results.
+
+Statistical power (`power`): on the same pairs, the interval an unpaired design would give
+(perturbed and base episodes resampled independently, as if they came from different seeds)
+against the paired one. An interval's width shrinks as 1/sqrt(n), so an unpaired design needs
+(unpaired width / paired width)^2 times as many episodes for the paired interval's width; the
+report states that ratio and the share of episodes pairing saves, 1 - (paired / unpaired)^2.
 """
 
 from __future__ import annotations
@@ -15,7 +21,8 @@ import numpy as np
 
 from .suite import BASE
 
-__all__ = ["bootstrap_mean", "Interval", "ConditionSummary", "summarize"]
+__all__ = ["bootstrap_mean", "bootstrap_difference", "Interval", "ConditionSummary", "summarize", "PowerSummary",
+           "power"]
 
 N_BOOT = 4000
 
@@ -45,6 +52,86 @@ def bootstrap_mean(values: Iterable[float], level: float = 0.95, n_boot: int = N
     tail = (1.0 - level) / 2.0
     lo, hi = np.quantile(means, [tail, 1.0 - tail])
     return Interval(float(x.mean()), float(lo), float(hi), int(x.size))
+
+
+def bootstrap_difference(x: Iterable[float], y: Iterable[float], level: float = 0.95, n_boot: int = N_BOOT,
+                         seed: int = 0) -> Interval:
+    """mean(x) - mean(y) with an unpaired percentile-bootstrap interval (x and y resampled independently)."""
+    a = np.asarray(list(x), dtype=np.float64)
+    b = np.asarray(list(y), dtype=np.float64)
+    if a.size == 0 or b.size == 0:
+        return Interval(float("nan"), float("nan"), float("nan"), 0)
+    rng = np.random.default_rng(seed)
+    diffs = a[rng.integers(0, a.size, (n_boot, a.size))].mean(1) - b[rng.integers(0, b.size, (n_boot, b.size))].mean(1)
+    tail = (1.0 - level) / 2.0
+    lo, hi = np.quantile(diffs, [tail, 1.0 - tail])
+    return Interval(float(a.mean() - b.mean()), float(lo), float(hi), int(min(a.size, b.size)))
+
+
+@dataclass(frozen=True)
+class PowerSummary:
+    """Paired against unpaired 95% interval widths of one condition's difference to the base.
+
+    Attributes:
+        metric: "return" or "success".
+        pairs: the number of (perturbed, base) pairs both designs use.
+        paired_width, unpaired_width: interval widths (high - low).
+        episode_ratio: episodes an unpaired design needs per paired episode for the paired width,
+            (unpaired / paired)^2; inf when the paired width is 0 and the unpaired one is not, nan
+            when both are 0 (no variation to compare).
+        saved: the share of episodes pairing saves, 1 - 1 / episode_ratio (nan with the ratio).
+    """
+
+    policy: str
+    perturbation: str
+    metric: str
+    pairs: int
+    paired_width: float
+    unpaired_width: float
+    episode_ratio: float
+    saved: float
+
+    def as_dict(self) -> dict:
+        """JSON-friendly (None for nan, "inf" for an infinite ratio)."""
+        out = asdict(self)
+        for k, v in out.items():
+            if isinstance(v, float) and np.isnan(v):
+                out[k] = None
+            elif isinstance(v, float) and np.isinf(v):
+                out[k] = "inf"
+        return out
+
+
+def _ratio(paired: float, unpaired: float) -> tuple[float, float]:
+    if paired > 1e-12:
+        r = (unpaired / paired) ** 2
+        return r, 1.0 - 1.0 / r if r > 0 else float("nan")
+    if unpaired > 1e-12:
+        return float("inf"), 1.0
+    return float("nan"), float("nan")
+
+
+def power(records: list[dict], policies: list[str], conditions: list[str],
+          metrics: tuple[str, ...] = ("return", "success")) -> list[PowerSummary]:
+    """Per (policy, perturbation, metric): paired vs unpaired interval widths on the same pairs."""
+    out = []
+    for policy in policies:
+        mine = [r for r in records if r["policy"] == policy and r["status"] == "ok"]
+        base = {r["seed"]: r for r in mine if r["perturbation"] == BASE}
+        for cond in conditions:
+            if cond == BASE:
+                continue
+            pairs = [(r, base[r["seed"]]) for r in mine if r["perturbation"] == cond and r["seed"] in base]
+            for metric in metrics:
+                x = [float(r[metric]) for r, _ in pairs]
+                y = [float(b[metric]) for _, b in pairs]
+                paired = bootstrap_mean([a - b for a, b in zip(x, y)])
+                unpaired = bootstrap_difference(x, y)
+                wp = paired.high - paired.low if pairs else float("nan")
+                wu = unpaired.high - unpaired.low if pairs else float("nan")
+                ratio, saved = _ratio(wp, wu) if pairs else (float("nan"), float("nan"))
+                out.append(PowerSummary(policy, cond, metric, len(pairs), wp, wu, ratio, saved))
+    return out
 
 
 @dataclass(frozen=True)

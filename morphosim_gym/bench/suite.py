@@ -19,12 +19,17 @@ perturbations:
     at: 20                                        # before the 20th step (0 = at reset, the default)
   - name: camera_shift
     camera: {orbit_deg: 25}                       # the env's reset camera option, relative to the scene
+  - axis: target_size                             # an axis of the registry (`tasks.axes.AXES`); keys given
+    at: 10                                        # here (name, edits, at, camera) override the axis's
+axes: all                                         # optional: one perturbation per registry axis (or a list
+                                                  # of names), before `perturbations` (then optional)
 ```
 
 Every episode of a perturbation is paired with the unperturbed ("base") episode of the same
 seed: same prompt, scene seed, reset seed and policy seed. Edit texts are templates:
 `{target}` ("red ball"), `{target_noun}`, `{target_color}`, `{distractor}` (the first other
-object, "blue cube"), `{distractor_noun}`, `{new_color}` (a colour no object of the scene has).
+object, "blue cube"), `{distractor_noun}`, `{new_color}` (a colour no object of the scene has),
+`{ground}` (the ground's name), `{swap_noun}` (a shape the target is not); see `tasks.axes`.
 
 Errors: an unknown or invalid top-level key is a `SuiteError` naming the key and the file
 (nothing runs); an invalid perturbation entry is kept with its `error`, so the runner records
@@ -45,6 +50,7 @@ from typing import Any, Mapping, Optional
 from morphosim_gym.envs import ENTRY_POINTS, env_id_of
 from morphosim_gym.limits import EPISODE_PLAN_BYTES, MAX_EPISODES, format_bytes
 from morphosim_gym.tasks import TASK_DIR, TaskSpec, load_task_spec
+from morphosim_gym.tasks.axes import AXES, TEMPLATE_FIELDS
 
 __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "builtin_suite_names", "SUITE_DIR",
            "ENV_TASKS", "TEMPLATE_FIELDS", "BASE"]
@@ -52,10 +58,9 @@ __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "
 SUITE_DIR = TASK_DIR / "suites"
 BASE = "base"
 ENV_TASKS = {env_id_of(kind): kind for kind in ENTRY_POINTS}      # env id -> the task kind it runs
-TEMPLATE_FIELDS = ("target", "target_noun", "target_color", "distractor", "distractor_noun", "new_color")
 SUITE_KEYS = ("name", "env", "description", "task", "scenes", "env_kwargs", "seed", "episodes", "frames",
-              "perturbations")
-PERTURBATION_KEYS = ("name", "description", "edits", "at", "camera")
+              "axes", "perturbations")
+PERTURBATION_KEYS = ("name", "axis", "description", "edits", "at", "camera")
 CAMERA_KEYS = ("orbit_deg", "pitch_deg", "distance_scale", "fov_y_deg")
 RESERVED_ENV_KWARGS = ("sim", "prompt", "target", "scene_seed", "scene_pool", "task", "render_mode", "on_edit_error",
                        "disable_env_checker")
@@ -194,7 +199,7 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     unknown = sorted(set(d) - set(SUITE_KEYS))
     if unknown:
         raise SuiteError(f"Unknown key {unknown[0]!r} in suite {source}; expected keys among {list(SUITE_KEYS)}")
-    for key in ("name", "env", "perturbations"):
+    for key in ("name", "env") + (() if "axes" in d else ("perturbations",)):
         if key not in d:
             raise SuiteError(f"Expected key {key!r} in suite {source}, found keys {sorted(d)}")
     name = str(d["name"])
@@ -210,9 +215,10 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     reserved = sorted(set(env_kwargs) & set(RESERVED_ENV_KWARGS))
     if reserved:
         raise SuiteError(f"Expected env_kwargs without {reserved[0]!r} (the runner sets it) in suite {source}")
-    perts = d["perturbations"]
+    perts = d.get("perturbations", [])
     if not isinstance(perts, list):
         raise SuiteError(f"Expected 'perturbations' to be a list in suite {source}, found {type(perts).__name__}")
+    perts = _axis_entries(d.get("axes"), source) + perts
     items = tuple(_perturbation(p, i, source) for i, p in enumerate(perts))
     names = [p.name for p in items]
     for i, p in enumerate(items):
@@ -247,9 +253,40 @@ def _task(task: Any, scenes: Any, env_id: str, source: str, base_dir: Path) -> T
         raise SuiteError(f"Invalid 'scenes' in suite {source}: {exc}") from None
 
 
+def _axis_entries(axes: Any, source: str) -> list[dict]:
+    """The perturbation entries of a suite's `axes` key ("all", or a list of registry names)."""
+    if axes is None:
+        return []
+    names = list(AXES) if axes == "all" else axes
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise SuiteError(f"Expected 'axes' as 'all' or a list of axis names in suite {source}, found {axes!r}")
+    unknown = [n for n in names if n not in AXES]
+    if unknown:
+        raise SuiteError(f"Unknown axis {unknown[0]!r} in suite {source}; known axes: {list(AXES)}")
+    return [{"axis": n} for n in names]
+
+
+def _with_axis(p: Mapping[str, Any], where: str) -> Mapping[str, Any]:
+    """An entry with `axis: NAME` completed from the registry (the entry's own keys win)."""
+    name = p.get("axis")
+    if name is None:
+        return p
+    axis = AXES.get(name) if isinstance(name, str) else None
+    if axis is None:
+        raise SuiteError(f"Unknown axis {name!r} in {where}; known axes: {list(AXES)}")
+    base: dict[str, Any] = {"name": axis.name, "description": axis.description, "at": axis.at}
+    if axis.edits:
+        base["edits"] = list(axis.edits)
+    if axis.camera is not None:
+        base["camera"] = dict(axis.camera)
+    base.update({k: v for k, v in p.items() if k != "axis"})
+    return base
+
+
 def _perturbation(p: Any, index: int, source: str) -> Perturbation:
     """A perturbation entry; an invalid one comes back with its `error` set (named if possible)."""
-    name = str(p.get("name")) if isinstance(p, Mapping) and p.get("name") is not None else f"perturbation_{index}"
+    key = "name" if isinstance(p, Mapping) and p.get("name") is not None else "axis"
+    name = str(p.get(key)) if isinstance(p, Mapping) and p.get(key) is not None else f"perturbation_{index}"
     try:
         return _check_perturbation(p, index, source)
     except SuiteError as exc:
@@ -263,6 +300,7 @@ def _check_perturbation(p: Any, index: int, source: str) -> Perturbation:
     unknown = sorted(set(p) - set(PERTURBATION_KEYS))
     if unknown:
         raise SuiteError(f"Unknown key {unknown[0]!r} in {where}; expected keys among {list(PERTURBATION_KEYS)}")
+    p = _with_axis(p, where)
     name = p.get("name")
     if not isinstance(name, str) or not _NAME.match(name) or name == BASE:
         raise SuiteError(f"Expected 'name' (letters, digits, '_', '.', '-'; not 'base') in {where}, found {name!r}")

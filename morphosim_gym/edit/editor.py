@@ -23,6 +23,7 @@ from ..language.plan import CameraOp, EditOp, ExtractOp, RecolorOp, RedirectOp, 
 from ..scene import Provenance, Scene4D
 from ..scene.camera import camera_path
 from . import ops
+from .axis_handlers import AXIS_HANDLERS
 from .select import Selection, Selector
 
 __all__ = ["SceneEditor"]
@@ -85,7 +86,7 @@ class SceneEditor:
         handler = _HANDLERS.get(type(op))
         if handler is None:
             raise EditError(f"Unsupported edit operation {getattr(op, 'op', type(op).__name__)!r}")
-        if isinstance(op, CameraOp):
+        if isinstance(op, CameraOp) or not op.targets:
             return handler(scene, op, None)
         return handler(scene, op, self.select(scene, op))
 
@@ -164,6 +165,6 @@ def _camera(scene: Scene4D, op: CameraOp, sel: None) -> Scene4D:
 
 _HANDLERS: dict[type, Callable[[Scene4D, Any, Any], Scene4D]] = {
     RecolorOp: _recolor, RemoveOp: _remove, ExtractOp: _extract, ReverseOp: _reverse, StopOp: _stop,
-    SpeedOp: _speed, RedirectOp: _redirect, CameraOp: _camera,
+    SpeedOp: _speed, RedirectOp: _redirect, CameraOp: _camera, **AXIS_HANDLERS,
 }
 

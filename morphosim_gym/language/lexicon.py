@@ -321,6 +321,22 @@ _TYPOS = _TypoIndex()
 _LEXICON: set[str] | None = None
 
 
+# Words of the perturbation-axis edit sentences (`rules.axis_edits`): the verbs that start them (an edit,
+# wherever they open a segment) and the rest they read, so that typo correction leaves them alone.
+AXIS_WORDS: dict[str, frozenset[str]] = {
+    "verbs": frozenset("""replace swap exchange substitute transform convert morph enlarge grow shrink scale resize
+        put place insert light illuminate relight warm cool widen narrow raise lower lift blur compress degrade
+        delay postpone advance start relocate transport texture introduce""".split()),
+    "words": frozenset("""twice thrice times bigger larger smaller huge giant tiny size sunset dusk evening cloudy
+        overcast night starry nighttime clear sunny dawn sunrise morning checkered checked chequered striped stripy
+        dotted spotted polka metallic metal chrome matte matt shiny glossy noisy speckled grainy pattern finish
+        material surface lights lighting illumination sunlight warmer cooler colder field fov wider narrower
+        percent metre metres meter meters centimetres centimeters noise grain blurry blurred compression compressed
+        jpeg artifacts artefacts image images video picture pictures sensor frames observations lens later earlier
+        sooner seconds second next beside behind front between occluding into""".split()),
+}
+
+
 def lexicon_words() -> set[str]:
     """Every word the rule parser knows (nouns, colours, verbs, direction and speed words...)."""
     global _LEXICON
@@ -329,7 +345,7 @@ def lexicon_words() -> set[str]:
         words |= set(MODIFIER_SYNONYMS) | set(VERBS) | set(DIRECTION_WORDS) | set(CLOCKWISE_WORDS)
         words |= {w for p in SPEED_PHRASES for w in p} | {w for s in SIZE_WORDS for w in s.split()}
         words |= {w for s in NUMBER_WORDS for w in s.split()} | set(COLLECTIVE_NOUNS) | EXTRA_WORDS
-        words |= set(VIEWER_WORDS) | set(CATEGORIES)
+        words |= set(VIEWER_WORDS) | set(CATEGORIES) | AXIS_WORDS["verbs"] | AXIS_WORDS["words"]
         _LEXICON = words
     return _LEXICON
 

@@ -48,7 +48,9 @@ from .vocabulary import CATEGORIES, SETTINGS
 
 __all__ = ["MODES", "PATHS", "CAMERA_MOTIONS", "CAMERA_DIRECTIONS", "EDIT_OPS", "RECOLOR_MODES", "MAX_COUNT",
            "ColorSpec", "ObjectSpec", "MotionSpec", "CameraSpec", "Target", "EditOp", "RecolorOp", "RemoveOp",
-           "ExtractOp", "ReverseOp", "RedirectOp", "SpeedOp", "StopOp", "CameraOp", "EDIT_KINDS", "EDIT_KEYS",
+           "ExtractOp", "ReverseOp", "RedirectOp", "SpeedOp", "StopOp", "CameraOp", "ScaleOp", "SwapOp", "InsertOp",
+           "LightOp", "SkyOp", "TextureOp", "SettingOp", "ViewOp", "SensorOp", "DelayOp", "LIGHT_MODES", "SKY_NAMES",
+           "TEXTURE_PATTERNS", "INSERT_RELATIONS", "SENSOR_EFFECTS", "EDIT_KINDS", "EDIT_KEYS",
            "edit_op", "Plan", "world_to_image"]
 
 MODES = ("generate", "edit")
@@ -58,7 +60,14 @@ CAMERA_DIRECTIONS: dict[str, tuple[str | None, ...]] = {
     "fixed": (None,), "orbit": (None, "clockwise", "counterclockwise"), "pan": (None, "left", "right"),
     "dolly": (None, "in", "out"),
 }
-EDIT_OPS = ("recolor", "remove", "extract", "reverse", "redirect", "speed", "stop", "camera")
+EDIT_OPS = ("recolor", "remove", "extract", "reverse", "redirect", "speed", "stop", "camera", "scale", "swap", "insert",
+            "light", "sky", "texture", "setting", "view", "sensor", "delay")
+# Scene-wide and object-level perturbation vocabularies (the axis edits' fields).
+LIGHT_MODES = ("brightness", "temperature", "direction")
+SKY_NAMES = ("clear", "sunset", "overcast", "night", "dawn")
+TEXTURE_PATTERNS = ("checkered", "striped", "dotted", "metallic", "matte", "glossy", "noisy")
+INSERT_RELATIONS = ("next_to", "occluding", "behind", "in_front")
+SENSOR_EFFECTS = ("noise", "blur", "jpeg")
 RECOLOR_MODES = ("assign", "additive", "multiplicative")
 GROUNDINGS = ("vocabulary", "embedding", "open", "given")
 MAX_COUNT = 20
@@ -375,7 +384,8 @@ class Target(_Spec):
 # Every key an edit's dict form has, in order: `to_dict` writes them all (null where a kind has no such
 # field) so that one JSON layout serves every kind, and `from_dict` accepts them all.
 EDIT_KEYS = ("op", "targets", "mode", "color", "delta", "factor_rgb", "direction_world", "path", "end", "around",
-             "clockwise", "factor", "speed", "speed_word", "camera", "direction_image", "direction_depth")
+             "clockwise", "factor", "speed", "speed_word", "camera", "category", "relation", "name", "amount",
+             "seconds", "direction_image", "direction_depth")
 _ABSENT: dict[str, Any] = {"direction_image": (0.0, 0.0), "direction_depth": 0.0}
 
 
@@ -563,8 +573,157 @@ class CameraOp(EditOp):
             raise CommandError("Invalid plan: a 'camera' edit has a camera and no targets")
 
 
+# -- perturbation axes: object size, swap, insertion, lighting, sky, texture, setting, view, sensor, delay -----
+@dataclass(frozen=True)
+class ScaleOp(EditOp):
+    """Resize the targets about their base point by `factor` ("twice as big" 2.0)."""
+
+    op: ClassVar[str] = "scale"
+    factor: float = 1.0
+
+    def _check(self) -> None:
+        object.__setattr__(self, "factor", _num(self.factor, "edit.factor", 0.0, MAX_SPEED, open_lo=True))
+
+
+@dataclass(frozen=True)
+class SwapOp(EditOp):
+    """Replace each target by a new object of `category` (optional `color`), same place, size and motion."""
+
+    op: ClassVar[str] = "swap"
+    category: str = ""
+    color: ColorSpec | None = None
+
+    def _check(self) -> None:
+        if not self.category:
+            raise _err("edit.category", "the category of the new object for op 'swap'", self.category)
+        _str(self.category, "edit.category")
+
+
+@dataclass(frozen=True)
+class InsertOp(EditOp):
+    """Add a static object of `category` (optional `color`) placed by `relation` to the targets (its anchors):
+    "next_to" beside it, "occluding" between the generation camera and it, "behind" / "in_front" along the view."""
+
+    op: ClassVar[str] = "insert"
+    category: str = ""
+    color: ColorSpec | None = None
+    relation: str = "next_to"
+
+    def _check(self) -> None:
+        if not self.category:
+            raise _err("edit.category", "the category of the new object for op 'insert'", self.category)
+        _str(self.relation, "edit.relation", INSERT_RELATIONS)
+
+
+@dataclass(frozen=True)
+class LightOp(EditOp):
+    """Change the light baked into every colour: mode "brightness" (`factor` > 0 multiplies), "temperature"
+    (`amount` in [-1, 1]: < 0 cooler, > 0 warmer) or "direction" (`direction_world`, light coming from there)."""
+
+    op: ClassVar[str] = "light"
+    needs_targets: ClassVar[bool] = False
+    mode: str = "brightness"
+    factor: float | None = None
+    amount: float | None = None
+    direction_world: Vec3 | None = None
+
+    def _check(self) -> None:
+        _str(self.mode, "edit.mode", LIGHT_MODES)
+        if self.mode == "brightness":
+            object.__setattr__(self, "factor", _num(self.factor, "edit.factor", 0.0, 10.0, open_lo=True))
+        elif self.mode == "temperature":
+            object.__setattr__(self, "amount", _num(self.amount, "edit.amount", -1.0, 1.0))
+        else:
+            d = _unit(self.direction_world, "edit.direction_world")
+            if d is None:
+                raise _err("edit.direction_world", "a direction for a 'direction' light edit", None)
+            object.__setattr__(self, "direction_world", d)
+
+
+@dataclass(frozen=True)
+class SkyOp(EditOp):
+    """Show the named sky (one of `SKY_NAMES`) behind the scene."""
+
+    op: ClassVar[str] = "sky"
+    needs_targets: ClassVar[bool] = False
+    name: str = "clear"
+
+    def _check(self) -> None:
+        _str(self.name, "edit.name", SKY_NAMES)
+
+
+@dataclass(frozen=True)
+class TextureOp(EditOp):
+    """Give the targets a surface pattern or material (`name`, one of `TEXTURE_PATTERNS`)."""
+
+    op: ClassVar[str] = "texture"
+    name: str = ""
+
+    def _check(self) -> None:
+        _str(self.name, "edit.name", TEXTURE_PATTERNS)
+
+
+@dataclass(frozen=True)
+class SettingOp(EditOp):
+    """Move the scene to another setting (`name`, one of `SETTINGS`): ground colour, backdrop and sky."""
+
+    op: ClassVar[str] = "setting"
+    needs_targets: ClassVar[bool] = False
+    name: str = ""
+
+    def _check(self) -> None:
+        _str(self.name, "edit.name", tuple(SETTINGS))
+
+
+@dataclass(frozen=True)
+class ViewOp(EditOp):
+    """Change the generation camera: field of view times `factor` and/or raise it by `amount` metres
+    (looking at the same point)."""
+
+    op: ClassVar[str] = "view"
+    needs_targets: ClassVar[bool] = False
+    factor: float | None = None
+    amount: float | None = None
+
+    def _check(self) -> None:
+        if self.factor is None and self.amount is None:
+            raise CommandError("Invalid plan: a 'view' edit has a field-of-view factor or a height change")
+        if self.factor is not None:
+            object.__setattr__(self, "factor", _num(self.factor, "edit.factor", 0.1, 3.0))
+        if self.amount is not None:
+            object.__setattr__(self, "amount", _num(self.amount, "edit.amount", -100.0, 100.0))
+
+
+@dataclass(frozen=True)
+class SensorOp(EditOp):
+    """Degrade what the cameras record (`name`: "noise", "blur" or "jpeg") with strength `amount` in (0, 1];
+    the scene carries it and `envs.SensorEffects` applies it to the observations."""
+
+    op: ClassVar[str] = "sensor"
+    needs_targets: ClassVar[bool] = False
+    name: str = "noise"
+    amount: float = 0.5
+
+    def _check(self) -> None:
+        _str(self.name, "edit.name", SENSOR_EFFECTS)
+        object.__setattr__(self, "amount", _num(self.amount, "edit.amount", 0.0, 1.0, open_lo=True))
+
+
+@dataclass(frozen=True)
+class DelayOp(EditOp):
+    """Shift the targets' motion in time: it starts `seconds` later (< 0: earlier), held at its ends."""
+
+    op: ClassVar[str] = "delay"
+    seconds: float = 0.0
+
+    def _check(self) -> None:
+        object.__setattr__(self, "seconds", _num(self.seconds, "edit.seconds", -3600.0, 3600.0))
+
+
 EDIT_KINDS: dict[str, type[EditOp]] = {k.op: k for k in (RecolorOp, RemoveOp, ExtractOp, ReverseOp, RedirectOp,
-                                                          SpeedOp, StopOp, CameraOp)}
+                                                          SpeedOp, StopOp, CameraOp, ScaleOp, SwapOp, InsertOp,
+                                                          LightOp, SkyOp, TextureOp, SettingOp, ViewOp, SensorOp,
+                                                          DelayOp)}
 _INIT_FIELDS = {k: frozenset(f.name for f in fields(k) if f.init) for k in EDIT_KINDS.values()}
 
 

@@ -75,7 +75,7 @@ def _scene_from(meta: dict, arrays: dict[str, np.ndarray], parent: Scene4D | Non
     return Scene4D(gaussians=g, motion=motion, objects=objects_from_dicts(meta["objects"]), fps=meta["fps"],
                    cameras=cameras_from_dicts(meta["cameras"]), decoders=decoders,
                    provenance=provenance_from_dict(meta["provenance"]), background=tuple(meta["background"]),
-                   parent=parent, sky=arrays.get("sky"))
+                   parent=parent, sky=arrays.get("sky"), sensor=tuple(tuple(e) for e in meta.get("sensor", ())))
 
 
 def load_scene(path: str | os.PathLike) -> Scene4D:

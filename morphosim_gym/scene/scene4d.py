@@ -106,6 +106,9 @@ class Scene4D:
         parent: the scene this one was edited from (for `undo`), if any.
         sky: an equirectangular sky image [H, W, 3] in [0, 1] (see `scene.sky`) that `render` shows
             behind the Gaussians instead of `background`, or None.
+        sensor: sensor effects the cameras record with, ((name, amount), ...) with name "noise",
+            "blur" or "jpeg" and amount in (0, 1]; `render` ignores them, the env's `SensorEffects`
+            wrapper applies them to the observations. () for a perfect sensor.
 
     Examples:
         >>> scene.at(1.0)            # world Gaussians 1 s into the clip (read-only)  # doctest: +SKIP
@@ -122,6 +125,7 @@ class Scene4D:
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     parent: "Scene4D | None" = None
     sky: np.ndarray | None = None
+    sensor: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.gaussians, Gaussians) or self.gaussians.is_torch:
@@ -164,6 +168,7 @@ class Scene4D:
         self.background = bg
         if self.sky is not None:
             self.sky = check_sky(self.sky)
+        self.sensor = _check_sensor(self.sensor)
         _freeze(self.gaussians)
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
@@ -347,11 +352,27 @@ class Scene4D:
             "decoders": {name: {"normalize": d.normalize} for name, d in self.decoders.items()},
             "provenance": self.provenance.to_dict(),
             "background": list(self.background),
+            **({"sensor": [list(e) for e in self.sensor]} if self.sensor else {}),   # absent: old hashes hold
         }
 
     def __repr__(self) -> str:
         return (f"Scene4D(gaussians={len(self.gaussians)}, frames={self.num_frames}, fps={self.fps:g}, "
                 f"objects={self.object_names}, edits={len(self.history)})")
+
+
+SENSOR_NAMES = ("noise", "blur", "jpeg")
+
+
+def _check_sensor(effects: object) -> tuple[tuple[str, float], ...]:
+    out = []
+    for e in tuple(effects or ()):  # type: ignore[arg-type]
+        if not (isinstance(e, (tuple, list)) and len(e) == 2 and e[0] in SENSOR_NAMES):
+            raise ValueError(f"Expected sensor effects as (name, amount) with name in {SENSOR_NAMES}, found {e!r}")
+        amount = float(e[1])
+        if not (math.isfinite(amount) and 0.0 < amount <= 1.0):
+            raise ValueError(f"Expected a sensor effect amount in (0, 1], found {e[1]!r}")
+        out.append((str(e[0]), amount))
+    return tuple(out)
 
 
 def _freeze(g: Gaussians) -> None:

@@ -26,6 +26,7 @@ from ..lexicon import (
     STOP_FILLERS,
     TINT_FILLERS,
 )
+from .axis_edits import AXIS_READERS
 from .camera import read_camera
 from .edit_phrases import EditPhrases
 from .nouns import parse_np
@@ -91,6 +92,10 @@ class EditReader(EditPhrases):
 
     def _read_one(self, toks: list[str]) -> list[dict]:
         """The ops of one operation, read by the reader of its verb."""
+        for axis_reader in AXIS_READERS.handlers_for(toks[0]):       # the perturbation axes' sentences first
+            drafts = axis_reader(self, toks)
+            if drafts is not None:
+                return drafts
         reader = _VERB_READERS.get(toks[0])
         if reader is None:
             raise self.fail(f"'{toks[0]}' is not an edit this parser knows")

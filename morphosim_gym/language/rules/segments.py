@@ -5,6 +5,7 @@ from __future__ import annotations
 from ...colors import match_color
 from ..lexicon import (
     AUX,
+    AXIS_WORDS,
     CONTINUATIONS,
     EDIT_VERBS,
     MODAL_FILLERS,
@@ -93,7 +94,7 @@ def classify(seg: list[str], after_generate: bool) -> tuple[str, list[str]]:
     if not toks:
         return "edit", seg
     w = toks[0]
-    if w in EDIT_VERBS and not (w == "set" and len(toks) > 1 and toks[1] == "of"):
+    if (w in EDIT_VERBS or w in AXIS_WORDS["verbs"]) and not (w == "set" and len(toks) > 1 and toks[1] == "of"):
         # "move the ball left" is an edit; "circle" etc. as imperative verbs are edits too
         return "edit", toks
     if w in ("i", "we") and len(toks) > 2 and toks[1] in ("want", "would", "need", "wish"):

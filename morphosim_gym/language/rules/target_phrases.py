@@ -25,7 +25,7 @@ from ..vocabulary import noun_to_category, singular
 from .nouns import parse_np
 from .tokens import stop_word
 
-__all__ = ["TargetDraft", "read_targets"]
+__all__ = ["TargetDraft", "read_targets", "POSITION_WORDS"]
 
 
 @dataclass
@@ -37,17 +37,55 @@ class TargetDraft:
     noun: str = ""
     color: tuple[str, tuple[float, float, float]] | None = None
     plural: bool = False
+    position: str | None = None  # "left", "right", "front", "back": which of several matches (see POSITION_WORDS)
+
+
+# Position words before a target's noun ("the left ball") -> which of the matching objects, as the
+# generation camera sees them at t = 0: leftmost / rightmost in the image, nearest / farthest.
+POSITION_WORDS = {"left": "left", "leftmost": "left", "right": "right", "rightmost": "right", "front": "front",
+                  "nearest": "front", "closest": "front", "near": "front", "back": "back", "farthest": "back",
+                  "furthest": "back", "far": "back", "rear": "back"}
 
 
 
 
 def read_targets(toks: Sequence[str], fail: Callable[[str], CommandError],
                  required: bool = True) -> tuple[list[TargetDraft], int]:
-    """The targets at the start of `toks` and the index after them.
+    """The targets at the start of `toks` and the index after them; a position word before a noun
+    ("the left ball") is read off into the target's `position`.
 
     Raises:
         CommandError: (from `fail`) no target where one is `required`.
     """
+    stripped, at = _strip_position(toks)
+    if at is None:
+        return _read_targets(toks, fail, required)
+    out, k = _read_targets(stripped, fail, required)
+    if at >= k:                                   # the targets ended before the position word
+        return _read_targets(toks, fail, required)
+    word = toks[at]
+    for t in out:
+        if t.kind == "noun":                      # the first noun target (a phrase has one position word)
+            t.position = POSITION_WORDS[word]
+            words = t.text.split()
+            t.text = " ".join(words[:1] + [word] + words[1:] if words and words[0] in DETS else [word] + words)
+            break
+    return out, k + 1
+
+
+def _strip_position(toks: Sequence[str]) -> tuple[list[str], int | None]:
+    """The tokens without the first position word that stands before a noun or colour (first, or after
+    a determiner), and its index (None: there is none)."""
+    for i, w in enumerate(toks):
+        if w not in POSITION_WORDS or i + 1 >= len(toks) or not (i == 0 or toks[i - 1] in DETS):
+            continue
+        if noun_to_category(toks[i + 1]) is not None or match_color(list(toks), i + 1) is not None:
+            return list(toks[:i]) + list(toks[i + 1:]), i
+    return list(toks), None
+
+
+def _read_targets(toks: Sequence[str], fail: Callable[[str], CommandError],
+                  required: bool = True) -> tuple[list[TargetDraft], int]:
     out: list[TargetDraft] = []
     i = 0
     n = len(toks)

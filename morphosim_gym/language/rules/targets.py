@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+
 from ...errors import CommandError
 from ..grounding import SceneItem, ground_noun, ground_noun_vocabulary, resolve_in_scene
 from ..plan import CameraSpec, ColorSpec, EditOp, Target, edit_op
@@ -9,7 +13,7 @@ from ..vocabulary import singular
 from .describe import ObjectDraft
 from .edits import EditReader
 from .nouns import NounPhrase
-from .target_phrases import TargetDraft
+from .target_phrases import POSITION_WORDS, TargetDraft
 from .tokens import detok
 
 __all__ = ["TargetResolver", "target_from_hits"]
@@ -19,6 +23,21 @@ def target_from_hits(text: str, noun: str, hits: list[SceneItem]) -> Target:
     cats = {h.category for h in hits}
     return Target(text=text, noun=noun, category=cats.pop() if len(cats) == 1 else None,
                   objects=tuple(h.name for h in hits), object_ids=tuple(h.id for h in hits))
+
+
+def _without_position(t: TargetDraft) -> str:
+    return " ".join(w for w in t.text.split() if w not in POSITION_WORDS)
+
+
+def pick_by_position(scene: Any, hits: list[SceneItem], position: str) -> SceneItem:
+    """The hit the position word names, as the scene's generation camera sees the objects at t = 0:
+    "left" / "right" the smallest / largest image x of its centre, "front" / "back" the nearest /
+    farthest from the camera."""
+    cam = scene.camera
+    centres = np.array([scene.object_center(h.id, 0.0) for h in hits])
+    uv, z = cam.project(centres)
+    key = {"left": uv[:, 0], "right": -uv[:, 0], "front": z, "back": -z}[position]
+    return hits[int(np.argmin(key))]
 
 
 class TargetResolver:
@@ -114,7 +133,10 @@ class TargetResolver:
                 hits = fg
             return target_from_hits(t.text, hits[0].name if len(hits) == 1 else hits[0].category, hits)
         noun = "*" if t.kind == "all" else t.noun
-        hits = resolve_in_scene(noun, items, t.text, t.color[1] if t.color else None)
+        hits = resolve_in_scene(noun, items, t.text if t.position is None else _without_position(t), t.color[1]
+                                if t.color else None)
+        if t.position is not None:
+            hits = [pick_by_position(self.scene, hits, t.position)]
         self.scene_salience.append(hits)
         cat = None if noun == "*" else (hits[0].category if len({h.category for h in hits}) == 1 else None)
         return Target(text=t.text, noun=noun, category=cat, objects=tuple(h.name for h in hits),
