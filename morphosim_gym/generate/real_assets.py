@@ -26,6 +26,7 @@ import numpy as np
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
 from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
+from ..scene.rotations import matrix_to_quat, quat_multiply
 
 __all__ = ["ASSET_MODES", "ASSET_PREFIX", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
            "uses_assets"]
@@ -116,12 +117,21 @@ def pick_asset(category: str, seed: int, k: int) -> AssetRecord | None:
     return cands[int(np.random.default_rng([seed, 3, k]).integers(len(cands)))]
 
 
+# a quarter turn about z: the front of a y-up model (-y in the asset layer's object frame) to +x,
+# the forward of the procedural builders, so a real car drives nose first
+FRONT_TO_X = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
 def asset_cloud(record: AssetRecord, budget: int, longest_m: float | None, seed: int) -> SurfaceCloud:
-    """The asset as a one-node surface cloud in its object frame (base on z = 0), longest side
-    `longest_m` metres (None: its real-world size)."""
+    """The asset as a one-node surface cloud in its object frame (base on z = 0, front towards +x),
+    longest side `longest_m` metres (None: its real-world size)."""
     g = asset_gaussians(record, budget=budget, size_m=longest_m, seed=seed)
     n = len(g.means)
-    return SurfaceCloud(means=np.asarray(g.means, dtype=np.float64), quats=np.asarray(g.quats, dtype=np.float64),
+    means, quats = np.asarray(g.means, dtype=np.float64), np.asarray(g.quats, dtype=np.float64)
+    if record.up_axis != "z":   # y-up files face -y in the object frame; procedural objects face +x
+        means = means @ FRONT_TO_X.T
+        quats = quat_multiply(np.broadcast_to(matrix_to_quat(FRONT_TO_X), quats.shape), quats)
+    return SurfaceCloud(means=means, quats=quats,
                         scales=np.asarray(g.scales, dtype=np.float64),
                         opacities=np.asarray(g.opacities, dtype=np.float64),
                         colors=np.asarray(g.colors, dtype=np.float64), nodes=np.zeros(n, dtype=np.int64),
