@@ -19,7 +19,8 @@ from .vocabulary import singular
 __all__ = ["MAX_ASSET_DEPTH", "head_word", "kind_category", "related", "visible_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
-MAX_ASSET_DEPTH = 2        # "a rake" may be shown by an asset named "Garden tool", not by "Tool"
+MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
+MAX_HYPONYMS = 12          # ... unless that names a broad class: "Tool" (dozens of kinds) does not show a rake
 PERSON_CATEGORIES = ("person", "snowboarder")
 _CUT = re.compile(r"\s+(?:with|of|for|on|in|and|from)\s+|[(,\-:]")
 
@@ -81,7 +82,8 @@ def _text_senses(text: str) -> tuple[wordnet.Synset, ...]:
 
 def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | None:
     """Whether a candidate named `text` shows a `noun`: the same sense, the noun a kind of it at most
-    `max_depth` steps up ("eagle" -> "Bird of prey"), or it a kind of the noun ("seat" -> "Armchair").
+    `max_depth` steps up and not a broad class (`MAX_HYPONYMS`), or it a kind of the noun ("seat" ->
+    "Armchair").
     None when WordNet is missing or does not know the noun."""
     if not wordnet.available():
         return None
@@ -92,6 +94,7 @@ def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | No
     for n in mine:
         up = _closure(n.offset)
         for t in theirs:
-            if up.get(t.offset, max_depth + 1) <= max_depth or n.offset in _closure(t.offset):
+            if n.offset in _closure(t.offset) or (up.get(t.offset, max_depth + 1) <= max_depth
+                                                  and t.n_hyponyms <= MAX_HYPONYMS):
                 return True
     return False

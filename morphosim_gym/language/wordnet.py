@@ -27,13 +27,15 @@ PHYSICAL_LEXFILES = frozenset(LEXFILES.values())
 
 @dataclass(frozen=True)
 class Synset:
-    """One noun sense: its byte offset in `data.noun`, lexicographer file, lemmas and hypernym offsets."""
+    """One noun sense: its byte offset in `data.noun`, lexicographer file, lemmas, hypernym offsets
+    and how many direct hyponyms (more specific senses) it has."""
 
     offset: int
     lexfile: str
     lemmas: tuple[str, ...]
     hypernyms: tuple[int, ...]
     gloss: str
+    n_hyponyms: int = 0
 
 
 _lock = threading.Lock()
@@ -100,7 +102,8 @@ def synset(offset: int) -> Synset | None:
         n_ptr = int(parts[at])
         ptrs = [parts[at + 1 + 4 * i:at + 5 + 4 * i] for i in range(n_ptr)]
         hyper = tuple(int(p[1]) for p in ptrs if p[0] in ("@", "@i") and p[2] == "n")
-        syn = Synset(offset, LEXFILES.get(int(parts[1]), parts[1]), lemmas, hyper, gloss.strip())
+        n_hypo = sum(1 for p in ptrs if p[0] in ("~", "~i"))
+        syn = Synset(offset, LEXFILES.get(int(parts[1]), parts[1]), lemmas, hyper, gloss.strip(), n_hypo)
     except (OSError, ValueError, IndexError):
         return None
     with _lock:
