@@ -11,6 +11,11 @@ compared with each category's name phrase and description, and the best category
 
 otherwise `CommandError` lists the known categories. So "sedan" -> car, "puppy" -> dog.
 
+Before that, an asset the noun names wins ("guitar" -> "Electric guitar"), and with real assets and
+WordNet installed (`hypernyms.py`) the grounding is checked: a category the noun is a kind of, else
+a candidate WordNet relates to it or one at least `CHECKED_FLOOR` similar; a noun none of these
+matches takes the nearest candidate as above, or with `$MORPHOSIM_GROUNDING=strict` is refused.
+
 Edit targets resolve against a scene's objects (duck-typed: ``.objects`` with ``.name`` and
 ``.category``; ``.id``, ``.role`` and ``.color`` are used when present) by, in order: everything
 ("all", "everything"), exact name, category (through the vocabulary), setting name, then embedding
@@ -107,9 +112,10 @@ def _anchor_table(settings: bool) -> tuple[np.ndarray, list[tuple[str, str]], np
 def ground_noun(noun: str, settings: bool = False, floor: float | None = None, phrase: str | None = None) -> Grounding:
     """Ground a noun to a category (or, with ``settings=True``, a setting or the camera).
 
-    Tries the vocabulary first; otherwise loads the embedding model (once) and picks the nearest
-    category for "a <phrase>" (``phrase`` defaults to the noun; the rule parser passes the noun with
-    its descriptive words, e.g. "golden retriever").
+    Tries the vocabulary, basic shapes and assets named by the noun first; then, with real assets
+    and WordNet installed, the checked grounding (`_ground_checked`); otherwise loads the embedding
+    model (once) and picks the nearest category for "a <phrase>" (``phrase`` defaults to the noun;
+    the rule parser passes the noun with its descriptive words, e.g. "golden retriever").
 
     Raises:
         CommandError: below the floor; the message lists the known categories.
@@ -122,18 +128,27 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
         return Grounding(noun, open_vocab.shape_for_word(noun))
     # a compound WordNet knows ("sewing machine") is not shown by any asset of its head ("Coffee machine")
     compound = phrase if phrase and phrase != noun and wordnet.senses(phrase, 1) else None
-    named = (phrase and phrase != noun and open_vocab.ground_named(phrase)) or \
-        (None if compound else open_vocab.ground_named(noun))
+    named = _named_asset(noun, phrase, compound is not None)
     if named is not None:
-        return Grounding(noun, named.category, method="open", similarity=named.similarity)
-    if floor is None:
-        words = english_words()
-        floor = GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
+        return named
+    floor = _default_floor(noun) if floor is None else floor
     if open_vocab.has_assets() and wordnet.available():
         checked = _ground_checked(noun, phrase or noun, settings, floor, kind_noun=compound or noun)
         if checked is not None:
             return checked
     return _ground_nearest(noun, phrase, settings, floor)
+
+
+def _named_asset(noun: str, phrase: str | None, compound: bool) -> Grounding | None:
+    """The candidate the phrase, else (unless the phrase is a compound) the noun, names."""
+    named = (phrase and phrase != noun and open_vocab.ground_named(phrase)) or \
+        (None if compound else open_vocab.ground_named(noun))
+    return Grounding(noun, named.category, method="open", similarity=named.similarity) if named else None
+
+
+def _default_floor(noun: str) -> float:
+    words = english_words()
+    return GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
 
 
 def grounding_policy() -> str:
