@@ -41,6 +41,7 @@ class QualityConfig:
     clip_model: Optional[str] = None
     qalign_model: Optional[str] = None
     trust_remote_code: bool = False       # let the Q-Align folder's own Python run (it needs it)
+    assets: str = "auto"                  # GenerationConfig.assets: "auto", "off" (procedural) or "require"
 
     def __post_init__(self) -> None:
         if not 96 <= int(self.size) <= 2048:
@@ -98,7 +99,7 @@ def score_prompts(prompts: Sequence[str], cfg: QualityConfig, progress: bool = T
 
     from .semantic import load_clip, load_qalign
 
-    sim = MorphoSim(reconstruction=cfg.reconstruction, generation=GenerationConfig(detail=cfg.detail))
+    sim = MorphoSim(reconstruction=cfg.reconstruction, generation=GenerationConfig(detail=cfg.detail, assets=cfg.assets))
     brisque = BrisqueScorer()
     clip, clip_why = load_clip(cfg.clip_model)
     qalign, qalign_why = load_qalign(cfg.qalign_model, trust_remote_code=cfg.trust_remote_code)

@@ -171,8 +171,9 @@ def _procedural_longest(category: str) -> float:
 
 
 def _base_cloud(inst: Instance, budget: int, rng: np.random.Generator, seed: int, k: int,
-                real: bool) -> SurfaceCloud:
-    """The object's cloud: a real asset where one matches (and `real`), else the procedural builder."""
+                real: bool, moving: bool = False) -> SurfaceCloud:
+    """The object's cloud: a real asset where one matches (and `real`), else the procedural builder.
+    A moving asset faces +x like the builders (it travels nose first); a still one faces the camera."""
     open_cat = inst.category.startswith(ASSET_PREFIX)
     record = pick_asset(inst.category, seed, k) if (real or open_cat) else None
     if record is None:
@@ -180,14 +181,15 @@ def _base_cloud(inst: Instance, budget: int, rng: np.random.Generator, seed: int
             raise ValueError(f"Expected an installed asset for {inst.category!r}, found none")
         return parts_to_gaussians(build_parts(inst.category), budget, inst.color, rng)
     inst.asset = f"{record.source}/{record.id}" if not record.id.startswith(record.source + "/") else record.id
-    return asset_cloud(record, budget, None if open_cat else _procedural_longest(inst.category), seed=0)
+    return asset_cloud(record, budget, None if open_cat else _procedural_longest(inst.category), seed=0,
+                       front_to_x=moving)
 
 
 def _object_cloud(inst: Instance, rng: np.random.Generator, config: GenerationConfig, seed: int = 0, k: int = 0,
-                  real: bool = False) -> None:
+                  real: bool = False, moving: bool = False) -> None:
     cat = category_spec(inst.category)
     budget = max(200, int(cat.budget * config.detail))
-    cloud = _base_cloud(inst, budget, rng, seed, k, real)
+    cloud = _base_cloud(inst, budget, rng, seed, k, real, moving)
     if inst.asked_color is not None:
         # the object as a whole reads as the asked colour: the mean of what a camera sees from the
         # side and slightly above (projected area of each surface Gaussian) matches in Lab
@@ -227,9 +229,11 @@ def compose_scene(plan: Any, seed: int, config: GenerationConfig | None = None, 
         instances.append(Instance(dressing, "seaweed", "seaweed", np.asarray(spec.color), None, 1.0,
                                   mobility=spec.mobility))
     real = uses_assets(config.assets)
-    for k, inst in enumerate(instances):
-        _object_cloud(inst, np.random.default_rng([seed, 1, k]), config, seed, k, real)
     motions = {m.target: m for m in plan.motions}
+    for k, inst in enumerate(instances):
+        m = motions.get(inst.spec.name)
+        _object_cloud(inst, np.random.default_rng([seed, 1, k]), config, seed, k, real,
+                      moving=m is not None and m.path != "stop")
     by_spec: dict[str, list[Instance]] = {}
     for inst in instances:
         by_spec.setdefault(inst.spec.name, []).append(inst)

@@ -26,6 +26,7 @@ import numpy as np
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
 from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
+from ..scene.rotations import matrix_to_quat, quat_multiply
 
 __all__ = ["ASSET_MODES", "ASSET_PREFIX", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
            "uses_assets"]
@@ -116,12 +117,22 @@ def pick_asset(category: str, seed: int, k: int) -> AssetRecord | None:
     return cands[int(np.random.default_rng([seed, 3, k]).integers(len(cands)))]
 
 
-def asset_cloud(record: AssetRecord, budget: int, longest_m: float | None, seed: int) -> SurfaceCloud:
+# a quarter turn about z: the front of a y-up model (-y in the asset layer's object frame) to +x
+FRONT_TO_X = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def asset_cloud(record: AssetRecord, budget: int, longest_m: float | None, seed: int,
+                front_to_x: bool = False) -> SurfaceCloud:
     """The asset as a one-node surface cloud in its object frame (base on z = 0), longest side
-    `longest_m` metres (None: its real-world size)."""
+    `longest_m` metres (None: its real-world size); with `front_to_x` a y-up model's front turns
+    from -y (towards the camera) to +x, the forward of the procedural builders."""
     g = asset_gaussians(record, budget=budget, size_m=longest_m, seed=seed)
     n = len(g.means)
-    return SurfaceCloud(means=np.asarray(g.means, dtype=np.float64), quats=np.asarray(g.quats, dtype=np.float64),
+    means, quats = np.asarray(g.means, dtype=np.float64), np.asarray(g.quats, dtype=np.float64)
+    if front_to_x and record.up_axis != "z":
+        means = means @ FRONT_TO_X.T
+        quats = quat_multiply(np.broadcast_to(matrix_to_quat(FRONT_TO_X), quats.shape), quats)
+    return SurfaceCloud(means=means, quats=quats,
                         scales=np.asarray(g.scales, dtype=np.float64),
                         opacities=np.asarray(g.opacities, dtype=np.float64),
                         colors=np.asarray(g.colors, dtype=np.float64), nodes=np.zeros(n, dtype=np.int64),

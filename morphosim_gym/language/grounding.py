@@ -11,6 +11,11 @@ compared with each category's name phrase and description, and the best category
 
 otherwise `CommandError` lists the known categories. So "sedan" -> car, "puppy" -> dog.
 
+Before that, an asset the noun names wins ("guitar" -> "Electric guitar"), and with real assets and
+WordNet installed (`hypernyms.py`) the grounding is checked: a category the noun is a kind of, else
+a candidate WordNet relates to it or one at least `CHECKED_FLOOR` similar; a noun none of these
+matches takes the nearest candidate as above, or with `$MORPHOSIM_GROUNDING=strict` is refused.
+
 Edit targets resolve against a scene's objects (duck-typed: ``.objects`` with ``.name`` and
 ``.category``; ``.id``, ``.role`` and ``.color`` are used when present) by, in order: everything
 ("all", "everything"), exact name, category (through the vocabulary), setting name, then embedding
@@ -19,6 +24,7 @@ similarity with the objects' names and categories (floor `SCENE_FLOOR`: "the veh
 
 from __future__ import annotations
 
+import os
 import re
 import threading
 from dataclasses import dataclass
@@ -27,11 +33,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import AmbiguousTargetError, CommandError, TargetNotFoundError
-from . import embeddings, open_vocab
+from . import embeddings, hypernyms, open_vocab, wordnet
 from .lexicon import english_words
 from .vocabulary import CATEGORIES, SETTINGS, noun_to_category, singular, word_to_setting
 
-__all__ = ["GROUNDING_FLOOR", "SCENE_FLOOR", "Grounding", "ground_noun", "ground_noun_vocabulary",
+__all__ = ["GROUNDING_FLOOR", "SCENE_FLOOR", "Grounding", "ground_noun", "ground_noun_vocabulary", "grounding_policy",
            "SceneItem", "scene_items", "resolve_in_scene", "CAMERA_WORDS", "ALL_WORDS"]
 
 GROUNDING_FLOOR = 0.45
@@ -39,6 +45,12 @@ GROUNDING_FLOOR = 0.45
 # words drift towards arbitrary categories at ~0.45-0.50 (calibrated on 76 real and 30 bad nouns).
 GROUNDING_FLOOR_UNKNOWN_WORD = 0.52
 SCENE_FLOOR = 0.45
+# With real assets (an open world), a noun WordNet does not relate to a candidate needs this much:
+# "kitten" -> cat (0.77) passes, "tiger" -> elephant (0.53) and "pear" -> apple (0.72) do not.
+CHECKED_FLOOR = 0.75
+POLICY_VAR = "MORPHOSIM_GROUNDING"
+POLICIES = ("nearest", "strict")
+CHECKED_TOP = 8           # candidates (categories, and shapes and assets) checked against WordNet
 AMBIGUITY_MARGIN = 0.03   # other categories this close to the best match make a target ambiguous
 ALL_MARGIN = 0.1          # "all the animals": every category this close to the best match
 CAMERA_WORDS = ("camera", "view", "viewpoint", "shot", "cam")
@@ -100,9 +112,10 @@ def _anchor_table(settings: bool) -> tuple[np.ndarray, list[tuple[str, str]], np
 def ground_noun(noun: str, settings: bool = False, floor: float | None = None, phrase: str | None = None) -> Grounding:
     """Ground a noun to a category (or, with ``settings=True``, a setting or the camera).
 
-    Tries the vocabulary first; otherwise loads the embedding model (once) and picks the nearest
-    category for "a <phrase>" (``phrase`` defaults to the noun; the rule parser passes the noun with
-    its descriptive words, e.g. "golden retriever").
+    Tries the vocabulary, basic shapes and assets named by the noun first; then, with real assets
+    and WordNet installed, the checked grounding (`_ground_checked`); otherwise loads the embedding
+    model (once) and picks the nearest category for "a <phrase>" (``phrase`` defaults to the noun;
+    the rule parser passes the noun with its descriptive words, e.g. "golden retriever").
 
     Raises:
         CommandError: below the floor; the message lists the known categories.
@@ -113,9 +126,42 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
         return hit
     if open_vocab.shape_for_word(noun):                                   # open vocabulary: basic shapes
         return Grounding(noun, open_vocab.shape_for_word(noun))
-    if floor is None:
-        words = english_words()
-        floor = GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
+    # a compound WordNet knows ("sewing machine") is not shown by any asset of its head ("Coffee machine")
+    compound = phrase if phrase and phrase != noun and wordnet.senses(phrase, 1) else None
+    named = _named_asset(noun, phrase, compound is not None)
+    if named is not None:
+        return named
+    floor = _default_floor(noun) if floor is None else floor
+    if open_vocab.has_assets() and wordnet.available():
+        checked = _ground_checked(noun, phrase or noun, settings, floor, kind_noun=compound or noun)
+        if checked is not None:
+            return checked
+    return _ground_nearest(noun, phrase, settings, floor)
+
+
+def _named_asset(noun: str, phrase: str | None, compound: bool) -> Grounding | None:
+    """The candidate the phrase, else (unless the phrase is a compound) the noun, names."""
+    named = (phrase and phrase != noun and open_vocab.ground_named(phrase)) or \
+        (None if compound else open_vocab.ground_named(noun))
+    return Grounding(noun, named.category, method="open", similarity=named.similarity) if named else None
+
+
+def _default_floor(noun: str) -> float:
+    words = english_words()
+    return GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
+
+
+def grounding_policy() -> str:
+    """`$MORPHOSIM_GROUNDING`: "nearest" (default: a noun nothing checked matches takes the nearest
+    category, shape or asset) or "strict" (it is refused, listing the nearest candidates)."""
+    policy = os.environ.get(POLICY_VAR, "nearest").strip().lower() or "nearest"
+    if policy not in POLICIES:
+        raise ValueError(f"Expected ${POLICY_VAR} in {POLICIES}, found {policy!r}")
+    return policy
+
+
+def _ground_nearest(noun: str, phrase: str | None, settings: bool, floor: float) -> Grounding:
+    """The nearest category, or open candidate, above the floors (the grounding without WordNet)."""
     vec, labels, reject = _anchor_table(settings)
     q = embeddings.embed([f"a {phrase or noun}"])[0]
     sims = vec @ q
@@ -126,14 +172,50 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     if opened is not None and (opened.similarity > score or score < floor or worst_reject > score):
         return Grounding(noun, opened.category, method="open", similarity=round(opened.similarity, 4))
     if score < floor or worst_reject > score:
-        known = ", ".join(CATEGORIES)
-        extra = f"; settings: {', '.join(SETTINGS)}" if settings else ""
-        raise CommandError(f"Could not understand the noun {noun!r}: it is not close to any object category "
-                           f"(best {labels[best][1]!r} at similarity {score:.2f}, needs {floor:.2f}). "
-                           f"Known categories: {known}{extra}. Nearest shapes and assets: "
-                           + ", ".join(f"{m.text} ({m.similarity:.2f})" for m in open_vocab.nearest_candidates(phrase or noun)))
+        raise _unknown_noun(noun, phrase or noun, settings, f"best {labels[best][1]!r} at similarity {score:.2f}, "
+                            f"needs {floor:.2f}")
     kind, category = labels[best]
     return Grounding(noun, category, kind=kind, method="embedding", similarity=round(score, 4))
+
+
+def _unknown_noun(noun: str, phrase: str, settings: bool, why: str) -> CommandError:
+    known = ", ".join(CATEGORIES)
+    extra = f"; settings: {', '.join(SETTINGS)}" if settings else ""
+    return CommandError(f"Could not understand the noun {noun!r}: it is not close to any object category "
+                        f"({why}). Known categories: {known}{extra}. Nearest shapes and assets: "
+                        + ", ".join(f"{m.text} ({m.similarity:.2f})" for m in open_vocab.nearest_candidates(phrase)))
+
+
+def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_noun: str) -> Grounding | None:
+    """Grounding when real assets make the world open: a category the noun is a kind of (WordNet),
+    else the most similar category, shape or asset that WordNet relates to the noun (from `floor`)
+    or that is very similar (`CHECKED_FLOOR`); else None, or with the "strict" policy a
+    `CommandError` with the nearest candidates. `kind_noun` is what WordNet is asked about (the
+    compound "sewing machine" for the noun "machine")."""
+    vec, labels, reject = _anchor_table(settings)
+    q = embeddings.embed([f"a {phrase}"])[0]
+    sims = vec @ q
+    kind = hypernyms.kind_category(kind_noun, CATEGORIES)
+    if kind is not None:
+        sim = max(float(sims[i]) for i, lab in enumerate(labels) if lab == ("category", kind))
+        return Grounding(noun, kind, method="embedding", similarity=round(sim, 4))
+    pool: dict[tuple[str, str], tuple[float, str]] = {}
+    for i in np.argsort(-sims, kind="stable")[:CHECKED_TOP]:
+        pool.setdefault(labels[i], (float(sims[i]), labels[i][1]))
+    for m in open_vocab.nearest_candidates(phrase, k=CHECKED_TOP):
+        pool.setdefault(("open", m.category), (m.similarity, m.text))
+    for (kind_, label), (sim, text) in sorted(pool.items(), key=lambda kv: -kv[1][0]):
+        if sim < floor:
+            break
+        if sim >= CHECKED_FLOOR or (kind_ != "setting" and hypernyms.related(kind_noun, text)):
+            method = "open" if kind_ == "open" else "embedding"
+            return Grounding(noun, label, kind="category" if kind_ == "open" else kind_, method=method,
+                             similarity=round(sim, 4))
+    if grounding_policy() != "strict":
+        return None
+    best = max(pool.values())
+    raise _unknown_noun(noun, phrase, settings, f"nothing it is a kind of, and the most similar, {best[1]!r} at "
+                        f"{best[0]:.2f}, is below {CHECKED_FLOOR:.2f}")
 
 
 # -- scene resolution --------------------------------------------------------------------------------

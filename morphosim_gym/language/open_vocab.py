@@ -20,9 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import embeddings
+from .hypernyms import head_word
+from .vocabulary import singular
 
-__all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_open", "is_open_category",
-           "nearest_candidates", "register_candidates", "shape_for_word"]
+__all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_named", "ground_open", "has_assets",
+           "is_open_category", "nearest_candidates", "register_candidates", "shape_for_word"]
 
 ASSET_PREFIX = "asset:"
 OPEN_FLOOR = 0.5          # cosine similarity an open candidate needs (made-up words stay below ~0.45)
@@ -114,3 +116,31 @@ def ground_open(phrase: str, floor: float = OPEN_FLOOR) -> OpenMatch | None:
     if not named and sims[best] < floor:
         return None
     return OpenMatch(labels[best], texts[best], round(float(sims[best]), 4))
+
+
+def has_assets() -> bool:
+    """Whether any registered table has candidates (real assets are installed and allowed)."""
+    return any(len(table()[0]) for table in list(_tables.values()))
+
+
+def _compact(text: str) -> str:
+    return "".join(re.findall(r"[a-z]+", text.lower()))
+
+
+def ground_named(noun: str) -> OpenMatch | None:
+    """The candidate named by the noun: its name is the noun ("Bunkbed" for "bunk bed"), or the
+    noun's words are words of its name and its last word is the name's head noun ("Electric
+    guitar" for "guitar", not "Spider plant" for "spider"); an exact name first, then the most
+    similar. None if none."""
+    words = re.findall(r"[a-z0-9]+", noun.lower())
+    if not words:
+        return None
+    labels, texts, vecs = _all_candidates()
+    want, head, compact = _words(noun), singular(words[-1]), _compact(noun)
+    exact = [i for i, t in enumerate(texts) if _compact(t) == compact]
+    named = exact or [i for i, t in enumerate(texts) if want <= _words(t) and head_word(t) == head]
+    if not named:
+        return None
+    sims = vecs[named] @ embeddings.embed([f"a {noun}"])[0]
+    k = int(np.argmax(sims))
+    return OpenMatch(labels[named[k]], texts[named[k]], round(float(sims[k]), 4))

@@ -55,3 +55,26 @@ def test_noun_list_has_300():
     from pathlib import Path
     nouns = [n for n in (Path(__file__).parent / "nouns_300.txt").read_text().splitlines() if n and n[0] != "#"]
     assert len(nouns) >= 300 and len(set(nouns)) == len(nouns)
+
+
+def test_named_assets_beat_the_nearest_category(real):
+    # "guitar" is nearer to the category rock (0.53) than to "Electric guitar" (0.51); the name decides
+    assert "guitar" in parse("a guitar").objects[0].category
+    assert parse("a spoon").objects[0].category.startswith("asset:")
+    from morphosim_gym.language.open_vocab import ground_named
+    assert ground_named("spider") is None                         # "Spider plant" is a plant
+    assert "bunkbed" in ground_named("bunk bed").category          # the name without its space
+
+
+def test_strict_policy_refuses_what_nothing_shows(real, monkeypatch):
+    from morphosim_gym.language import wordnet
+    if not wordnet.available():
+        pytest.skip("needs WordNet (apt install wordnet-base)")
+    monkeypatch.setenv("MORPHOSIM_GROUNDING", "strict")
+    with pytest.raises(CommandError, match="tiger.*Nearest shapes and assets: .+\\(0\\.\\d\\d\\)"):
+        parse("a tiger")
+    assert parse("an eagle").objects[0].category == "bird"       # a kind of bird (WordNet)
+    assert parse("a kitten").objects[0].category == "cat"        # very similar (0.77)
+    monkeypatch.setenv("MORPHOSIM_GROUNDING", "loose")
+    with pytest.raises(ValueError, match="MORPHOSIM_GROUNDING"):
+        parse("a tiger")

@@ -1,0 +1,100 @@
+"""Which category or candidate a noun is a kind of, by WordNet hypernyms (`wordnet.py`).
+
+Embedding similarity alone puts "tiger" next to "elephant" and "pear" next to "apple"; WordNet
+says an eagle is a bird and a tiger is not a cat. Only senses of visible things count (animal,
+artifact, food, object, plant, person), among a word's three most frequent senses; a person
+sense counts only when the word has no other visible sense ("monitor" is a screen, not a proctor).
+Every function answers None when WordNet is not installed or does not know the word.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from functools import lru_cache
+
+from . import wordnet
+from .vocabulary import singular
+
+__all__ = ["MAX_ASSET_DEPTH", "head_word", "kind_category", "related", "visible_senses"]
+
+SENSES = 3                 # a word's most frequent senses that count
+MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
+MAX_HYPONYMS = 12          # ... unless that names a broad class: "Tool" (dozens of kinds) does not show a rake
+PERSON_CATEGORIES = ("person", "snowboarder")
+_CUT = re.compile(r"\s+(?:with|of|for|on|in|and|from)\s+|[(,\-:]")
+
+
+def head_word(text: str) -> str:
+    """The head noun of a name: the last word before any "with"/"of"... clause ("Bowl with fruits"
+    -> "bowl"), lower case, digits dropped, crudely singular."""
+    first = _CUT.split(text.lower(), maxsplit=1)[0]
+    words = re.findall(r"[a-z]+", first)
+    return singular(words[-1]) if words else ""
+
+
+@lru_cache(maxsize=4096)
+def visible_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]:
+    """The word's senses that are visible things (see the module doc); `person=False` drops person senses."""
+    found = [s for s in wordnet.senses(word, SENSES) if s.lexfile in wordnet.PHYSICAL_LEXFILES]
+    if not person or any(s.lexfile != "person" for s in found):
+        found = [s for s in found if s.lexfile != "person"]
+    return tuple(found)
+
+
+@lru_cache(maxsize=256)
+def _category_senses(category: str) -> frozenset[int]:
+    if category == "person":                            # person.n.01 sits at the top of WordNet
+        return frozenset(s.offset for s in wordnet.senses(category, 1))
+    senses = visible_senses(category, person=category in PERSON_CATEGORIES)
+    if any(s.lexfile == "animal" for s in senses):      # "bird" the animal, not its meat
+        senses = tuple(s for s in senses if s.lexfile != "food")
+    return frozenset(s.offset for s in senses)
+
+
+@lru_cache(maxsize=4096)
+def _closure(offset: int) -> dict[int, int]:
+    s = wordnet.synset(offset)
+    return wordnet.hypernym_closure(s) if s is not None else {}
+
+
+def _noun_senses(noun: str) -> tuple[wordnet.Synset, ...]:
+    return visible_senses(noun) or visible_senses(singular(noun))
+
+
+def kind_category(noun: str, categories: Iterable[str]) -> str | None:
+    """The category the noun's most frequent visible sense is a kind of (nearest one), else None
+    ("pear" is the fruit, not the pear tree, so not a kind of tree)."""
+    senses = _noun_senses(noun) if wordnet.available() else ()
+    if not senses:
+        return None
+    closure = _closure(senses[0].offset)
+    hits = [(min(closure[o] for o in offs if o in closure), c)
+            for c, offs in ((c, _category_senses(c)) for c in categories) if offs & closure.keys()]
+    return min(hits)[1] if hits else None
+
+
+def _text_senses(text: str) -> tuple[wordnet.Synset, ...]:
+    words = re.findall(r"[a-z]+", text.lower())
+    whole = visible_senses(" ".join(words)) if len(words) > 1 else ()
+    return whole or visible_senses(head_word(text))
+
+
+def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | None:
+    """Whether a candidate named `text` shows a `noun`: the same sense, the noun a kind of it at most
+    `max_depth` steps up and not a broad class (`MAX_HYPONYMS`), or it a kind of the noun ("seat" ->
+    "Armchair").
+    None when WordNet is missing or does not know the noun."""
+    if not wordnet.available():
+        return None
+    mine = _noun_senses(noun)
+    if not mine:
+        return None
+    theirs = _text_senses(text)
+    for n in mine:
+        up = _closure(n.offset)
+        for t in theirs:
+            if n.offset in _closure(t.offset) or (up.get(t.offset, max_depth + 1) <= max_depth
+                                                  and t.n_hyponyms <= MAX_HYPONYMS):
+                return True
+    return False

@@ -1,0 +1,62 @@
+"""WordNet reader and "is a kind of" checks (skipped without Debian's wordnet-base)."""
+
+import pytest
+
+from morphosim_gym.language import hypernyms, wordnet
+from morphosim_gym.language.vocabulary import CATEGORIES
+
+needs_wordnet = pytest.mark.skipif(not wordnet.available(), reason="needs WordNet (apt install wordnet-base)")
+
+
+def test_missing_files_answer_unknown(monkeypatch, tmp_path):
+    monkeypatch.setenv(wordnet.ENV_VAR, str(tmp_path))
+    monkeypatch.setattr(wordnet, "_state", {})
+    hypernyms.visible_senses.cache_clear()
+    try:
+        assert not wordnet.available()
+        assert wordnet.senses("dog") == []
+        assert hypernyms.kind_category("eagle", CATEGORIES) is None
+        assert hypernyms.related("eagle", "Bird") is None
+    finally:
+        hypernyms.visible_senses.cache_clear()
+
+
+def test_head_word():
+    assert hypernyms.head_word("Bowl with fruits") == "bowl"
+    assert hypernyms.head_word("Electric guitar") == "guitar"
+    assert hypernyms.head_word("TV 16:9") == "tv"
+    assert hypernyms.head_word("Beige sofa 2 seats") == "seat"
+    assert hypernyms.head_word("") == ""
+
+
+@needs_wordnet
+def test_senses_and_closure():
+    dog = wordnet.senses("dog", 1)[0]
+    assert "dog" in dog.lemmas and dog.lexfile == "animal"
+    assert wordnet.senses("fire hydrant")          # compounds are looked up with underscores
+    assert wordnet.senses("florbnax") == []
+    up = wordnet.hypernym_closure(dog)
+    assert up[dog.offset] == 0 and len(up) > 5
+
+
+@needs_wordnet
+@pytest.mark.parametrize("noun, category", [("eagle", "bird"), ("sedan", "car"), ("puppy", "dog"),
+                                            ("armchair", "chair"), ("shark", "fish"), ("nurse", "person")])
+def test_kind_category(noun, category):
+    assert hypernyms.kind_category(noun, CATEGORIES) == category
+
+
+@needs_wordnet
+@pytest.mark.parametrize("noun", ["tiger", "pear", "goat", "helicopter", "monitor", "zebra"])
+def test_not_a_kind_of_any_category(noun):
+    # tiger is a big cat, not a cat; a pear is the fruit, not the pear tree; a monitor is not a proctor
+    assert hypernyms.kind_category(noun, CATEGORIES) is None
+
+
+@needs_wordnet
+def test_related():
+    assert hypernyms.related("seat", "Armchair") is True          # the asset is a kind of the noun
+    assert hypernyms.related("couch", "Sofa") is True              # the same sense
+    assert hypernyms.related("kettle", "Teapot") is False
+    assert hypernyms.related("rake", "Tool") is False              # too general to show a rake
+    assert hypernyms.related("florbnax", "Tool") is None
