@@ -87,6 +87,7 @@ def main() -> None:
                          "feature field get a sixth of it each)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--json-each", type=Path, default=None, help="also rewrite this JSON after every prompt")
     ap.add_argument("--priors", choices=tuple(PRIOR_CONFIG), default="ground_truth",
                     help="where the fit's depth, masks and tracks come from")
     ap.add_argument("--cache-dir", default=None, help="where fitted scenes are left (default: the package cache)")
@@ -111,6 +112,9 @@ def main() -> None:
         x = row(r)
         print(f"{prompt[:58]:58s} {args.priors:>12s} {x['input_psnr']:6.2f} {x['novel15_psnr']:6.2f} {x['novel30_psnr']:6.2f} "
               f"{x['iou']:5.3f} {x['semantic_pr']:5.3f} {x['seconds']:5.1f}s  {r['load']:.1f}", flush=True)
+        if args.json_each:          # after every prompt, so an interrupted run keeps what it measured
+            write_json(args.json_each, {"size": args.size, "frames": args.frames, "iterations": args.iterations or 1200,
+                                        "seed": args.seed, "priors": args.priors, "reports": reports})
     rows = [row(r) for r in reports]
     print("\nbars (worst prompt):")
     for key, bar in BARS.items():
