@@ -121,3 +121,24 @@ def test_an_object_hidden_at_its_foot_takes_its_contact_from_the_free_columns():
     mask[10:12, 2:6] = False
     assert contact_depth(mask, ground, 1.0, blocked=blocked) == 10.0
     assert contact_depth(mask, ground, 1.0, blocked=np.ones_like(mask)) == 10.0   # all blocked: as without
+
+
+def test_an_object_entering_after_the_first_frame_is_tracked():
+    from morphosim_gym.priors import flow_tracks
+
+    rng = np.random.default_rng(1)
+    bg = rng.integers(90, 110, (48, 64, 3)).astype(np.uint8)
+    patch = rng.integers(0, 255, (12, 12, 3)).astype(np.uint8)
+    frames = []
+    for i in range(9):
+        f = bg.copy()
+        x0 = 70 - 3 * i                                 # outside the view until frame 3
+        lo, hi = max(x0, 0), min(x0 + 12, 64)
+        if hi > lo:
+            f[20:32, lo:hi] = patch[:, lo - x0:hi - x0]
+        frames.append(f)
+    tracks, visible = flow_tracks(np.stack(frames), spacing=4)
+    # tracks seeded after frame 0 follow the patch at its speed (3 px per frame to the left)
+    on = visible[:, 6] & visible[:, 8] & (tracks[:, 6, 1] > 21) & (tracks[:, 6, 1] < 31) & (tracks[:, 6, 0] > 52)
+    assert on.sum() >= 3
+    assert np.allclose(tracks[on, 8, 0] - tracks[on, 6, 0], -6.0, atol=1.0)
