@@ -1,8 +1,8 @@
 #!/usr/bin/env python
 """Reconstruction quality and time on the generator's example prompts (issue #5 bars).
 
-    python benchmarks/reconstruct.py [--prompts all|paper] [--size 128] [--json out.json]
-                                     [--priors ground_truth|estimated|corrupted]
+    python benchmarks/reconstruct.py [--prompts all|paper] [--size 128] [--frames 49] [--iterations 1200] [--json out.json]
+                                     [--priors ground_truth|estimated|corrupted] [--only WORDS]...
 
 --priors says where the fit's depth, masks and tracks come from (printed in every row):
 ground_truth = the generator's renders of its own scene (an upper bound), estimated = from the
@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -77,17 +78,30 @@ def row(r: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--prompts", choices=("all", "paper"), default="all")
+    ap.add_argument("--only", action="append", default=None, metavar="WORDS",
+                    help="keep only the prompts containing these words (repeatable)")
     ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--frames", type=int, default=49, help="frames per clip")
+    ap.add_argument("--iterations", type=int, default=None,
+                    help="fit iterations (default the ReconstructionConfig's 1200; the completion polish and the "
+                         "feature field get a sixth of it each)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--json-each", type=Path, default=None, help="also rewrite this JSON after every prompt")
     ap.add_argument("--priors", choices=tuple(PRIOR_CONFIG), default="ground_truth",
                     help="where the fit's depth, masks and tracks come from")
     ap.add_argument("--cache-dir", default=None, help="where fitted scenes are left (default: the package cache)")
     args = ap.parse_args()
     prompts = EXAMPLE_PROMPTS if args.prompts == "all" else tuple(p for p, _ in PAPER_SCENES)
-    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=args.size, height=args.size),
-                       reconstruction_config=ReconstructionConfig(progress=False, cache_dir=args.cache_dir,
-                                                                         priors=PRIOR_CONFIG[args.priors]))
+    if args.only:
+        prompts = tuple(p for p in prompts if any(w.lower() in p.lower() for w in args.only))
+    config = ReconstructionConfig(progress=False, cache_dir=args.cache_dir, priors=PRIOR_CONFIG[args.priors])
+    if args.iterations:
+        n = max(1, args.iterations)
+        config = replace(config, fit=replace(config.fit, iterations=n), complete_iterations=max(1, n // 6),
+                         features=replace(config.features, iterations=max(1, n // 6)))
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=args.size, height=args.size, num_frames=args.frames),
+                       reconstruction_config=config)
     reports = []
     print(f"{'prompt':58s} {'priors':>12s} {'input':>6s} {'+-15':>6s} {'+-30':>6s} {'IoU':>5s} {'sem':>5s} "
           f"{'time':>6s}  load")
@@ -98,13 +112,16 @@ def main() -> None:
         x = row(r)
         print(f"{prompt[:58]:58s} {args.priors:>12s} {x['input_psnr']:6.2f} {x['novel15_psnr']:6.2f} {x['novel30_psnr']:6.2f} "
               f"{x['iou']:5.3f} {x['semantic_pr']:5.3f} {x['seconds']:5.1f}s  {r['load']:.1f}", flush=True)
+        if args.json_each:          # after every prompt, so an interrupted run keeps what it measured
+            write_json(args.json_each, {"size": args.size, "frames": args.frames, "iterations": args.iterations or 1200,
+                                        "seed": args.seed, "priors": args.priors, "reports": reports})
     rows = [row(r) for r in reports]
     print("\nbars (worst prompt):")
     for key, bar in BARS.items():
         vals = [x[key] for x in rows]
         worst = max(vals) if key == "seconds" else min(vals)
         print(bar_line(key, bar, worst, higher_is_better=key != "seconds", median=float(np.median(vals))))
-    write_json(args.json, {"size": args.size, "seed": args.seed, "priors": args.priors, "reports": reports})
+    write_json(args.json, {"size": args.size, "frames": args.frames, "iterations": args.iterations or 1200, "seed": args.seed, "priors": args.priors, "reports": reports})
 
 
 if __name__ == "__main__":

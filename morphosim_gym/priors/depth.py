@@ -23,19 +23,24 @@ def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: fl
     return np.where(ok, z, 0.0).astype(np.float32)
 
 
-def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float) -> float:
+def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked: np.ndarray | None = None) -> float:
     """Camera depth of an object from where its mask [H, W] meets the ground: the ground depth
     [H, W] under the mask's lowest pixels (the median over its bottom row's columns, taken one
-    pixel below the mask). `fallback` when the mask touches no ground (a fish in the water,
-    a bird in the sky) or is empty."""
+    pixel below the mask). Columns where the pixel below is `blocked` [H, W] (another object in
+    front hides the contact) are left out unless every column is. `fallback` when the mask
+    touches no ground (a fish in the water, a bird in the sky) or is empty."""
     rows, cols = np.nonzero(mask)
     if len(rows) == 0:
         return float(fallback)
     h = mask.shape[0]
-    bottom = {}
-    for r, c in zip(rows, cols):
-        if r > bottom.get(c, -1):
-            bottom[c] = r
-    z = [ground[min(r + 1, h - 1), c] for c, r in bottom.items()]
-    z = [v for v in z if v > 0]
-    return float(np.median(z)) if z else float(fallback)
+    bottom = np.full(mask.shape[1], -1)
+    np.maximum.at(bottom, cols, rows)
+    c = np.flatnonzero(bottom >= 0)
+    below = np.minimum(bottom[c] + 1, h - 1)
+    if blocked is not None:
+        free = ~blocked[below, c]
+        if free.any():
+            c, below = c[free], below[free]
+    z = ground[below, c]
+    z = z[z > 0]
+    return float(np.median(z)) if z.size else float(fallback)

@@ -139,8 +139,8 @@ def label_regions(foreground: np.ndarray, targets: Sequence[BoxTrack], box_margi
                   min_cover: float = 0.3, frames: np.ndarray | None = None,
                   min_fill: float = 0.3) -> tuple[np.ndarray, dict[int, str]]:
     """Foreground [T, H, W] -> ([T, H, W] int32 ids 1.. of the planned objects (0 elsewhere), labels).
-    A connected region goes to the target whose grown box covers the largest share of it (at
-    least `min_cover`), clipped to that box; a target whose region fills less than `min_fill` of
+    A connected region is shared out among the targets whose grown boxes cover at least
+    `min_cover` of it (`_split_region`: by box, the nearest in front where boxes overlap); a target whose region fills less than `min_fill` of
     its box in a frame is completed by `box_contrast` on `frames` (when given). Without targets
     every region is id 1 "object"."""
     t, h, w = foreground.shape
@@ -149,24 +149,40 @@ def label_regions(foreground: np.ndarray, targets: Sequence[BoxTrack], box_margi
         ids[foreground] = 1
         return ids, ({1: "object"} if foreground.any() else {})
     labels = {k + 1: tg.label for k, tg in enumerate(targets)}
+    bottoms = np.array([np.asarray(tg.boxes, np.float64)[:, 3] for tg in targets])     # [K, T]
     for i in range(t):
         n, lab = cv2.connectedComponents(foreground[i].astype(np.uint8), connectivity=8)
         boxes = _box_masks(targets, i, h, w, box_margin)
+        tight = _box_masks(targets, i, h, w, 0.0)
         for c in range(1, n):
             comp = lab == c
-            cover = [float((comp & b).sum()) / float(comp.sum()) for b in boxes]
-            k = int(np.argmax(cover))
-            if cover[k] >= min_cover:
-                take = comp & boxes[k] & (ids[i] == 0)
-                ids[i][take] = k + 1
+            cover = np.array([float((comp & b).sum()) / float(comp.sum()) for b in boxes])
+            owners = np.flatnonzero(cover >= min_cover)
+            if len(owners):
+                ids[i] = _split_region(comp, owners, boxes, tight, bottoms[:, i], ids[i])
         if frames is None:
             continue
-        tight = _box_masks(targets, i, h, w, 0.0)
         for k, b in enumerate(tight):
             if (ids[i] == k + 1).sum() < min_fill * b.sum():
                 extra = _clean(box_contrast(frames[i], b), 2) & (ids[i] == 0)
                 ids[i][extra] = k + 1
     return ids, labels
+
+
+def _split_region(comp: np.ndarray, owners: np.ndarray, grown: Sequence[np.ndarray], tight: Sequence[np.ndarray],
+                  bottoms: np.ndarray, ids: np.ndarray) -> np.ndarray:
+    """[H, W] ids with a connected moving region shared out among the targets `owners` whose boxes
+    cover it: each pixel goes to a target whose tight box holds it (else whose grown box does),
+    and where several do, to the nearest (objects stand on the ground: the lowest box bottom is
+    in front). Pixels already labelled stay as they are."""
+    out = ids.copy()
+    # rank: 2 inside the tight box, 1 inside the grown one; the box bottom breaks ties (front wins)
+    score = np.stack([2.0 * tight[k] + 1.0 * grown[k] + 1e-3 * bottoms[k] * (tight[k] | grown[k])
+                      for k in owners])
+    best = owners[np.argmax(score, axis=0)]
+    take = comp & (score.max(axis=0) > 0) & (out == 0)
+    out[take] = best[take] + 1
+    return out
 
 
 def box_contrast(frame: np.ndarray, box: np.ndarray, ring: int = 3, min_colour: float = 25.0) -> np.ndarray:

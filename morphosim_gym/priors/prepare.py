@@ -22,8 +22,12 @@ def _carried(clip: GeneratedClip) -> str:
 
 
 def _setting_label(clip: GeneratedClip) -> str:
+    """The setting's object name: the plan's setting word in its canonical form ("underwater" ->
+    "water", the name the generator gives that background), "ground" without one."""
+    from ..language.vocabulary import word_to_setting
+
     s = clip.info.get("setting")
-    return str(s) if s else "ground"
+    return (word_to_setting(str(s).lower()) or str(s)) if s else "ground"
 
 
 def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorEstimators | None = None) -> GeneratedClip:

@@ -76,7 +76,8 @@ class RGBPriorEstimators:
                 if inst <= SETTING_ID:
                     continue
                 sel = masks[i] == inst
-                out[i][sel] = contact_depth(sel, ground, fallback)
+                others = (masks[i] > SETTING_ID) & ~sel          # an object in front hides the contact
+                out[i][sel] = contact_depth(sel, ground, fallback, blocked=others)
         return out.astype(np.float32)
 
     def masks(self, frames: np.ndarray, attention: np.ndarray | None, targets: Sequence[BoxTrack],

@@ -10,7 +10,9 @@ Steps (MoSca / Feature 4X style, sized for a 2-core CPU):
 Priors come from `config.priors` (`morphosim_gym.priors.prepare_priors`): by default ("auto")
 the ones the clip carries, with the missing ones estimated from the frames (a clip of frames
 and cameras alone is reconstructed, never refused); "estimated" estimates all three;
-"ground_truth" takes the clip's own as they are. Only the clip's frames, cameras and priors
+"ground_truth" takes the clip's own as they are. A clip in which nothing can be seen to move
+(a single frame, or frames that do not change) has estimated masks holding only the setting and
+is reconstructed as that static setting (a reduced result, not an error). Only the clip's frames, cameras and priors
 are used, never `clip.ground_truth`. Results are
 cached on disk by the content hash of the clip and the configuration (atomic writes), so a
 second call with the same clip and settings loads the scene instead of fitting again.

@@ -90,3 +90,55 @@ def test_bad_priors_name_the_field():
         GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, tracks=tracks)
     with pytest.raises(ValueError, match="depth of shape"):
         GeneratedClip(frames=frames, cameras=(cam,) * len(frames), fps=8.0, depth=np.ones((2, 48, 64), np.float32))
+
+
+def test_one_moving_region_under_two_planned_boxes_is_shared_out_front_first():
+    from morphosim_gym.priors.masks import label_regions
+
+    fg = np.zeros((1, 40, 40), bool)
+    fg[0, 10:22, 6:20] = True                        # the one behind (its box ends higher up)
+    fg[0, 16:32, 12:30] = True                       # the one in front overlaps it: one connected region
+    back = PlanTarget("sheep 2", np.array([[6 / 40, 10 / 40, 20 / 40, 22 / 40]]))
+    front = PlanTarget("sheep 1", np.array([[12 / 40, 16 / 40, 30 / 40, 32 / 40]]))
+    ids, labels = label_regions(fg, [front, back])
+    assert labels == {1: "sheep 1", 2: "sheep 2"}
+    truth_front = np.zeros((40, 40), bool)
+    truth_front[16:32, 12:30] = True
+    truth_back = fg[0] & ~truth_front
+    for k, truth in ((1, truth_front), (2, truth_back)):
+        pred = ids[0] == k
+        assert (pred & truth).sum() / (pred | truth).sum() > 0.9, labels[k]
+
+
+def test_an_object_hidden_at_its_foot_takes_its_contact_from_the_free_columns():
+    from morphosim_gym.priors.depth import contact_depth
+
+    ground = np.repeat(np.arange(1, 21, dtype=np.float32)[::-1, None], 10, axis=1)   # row r: depth 20 - r
+    mask = np.zeros((20, 10), bool)
+    mask[4:10, 2:8] = True                           # bottom row 9: the ground below (row 10) is at 10
+    blocked = np.zeros_like(mask)
+    blocked[10:, 2:6] = True                         # another object in front under four columns
+    mask[10:12, 2:6] = False
+    assert contact_depth(mask, ground, 1.0, blocked=blocked) == 10.0
+    assert contact_depth(mask, ground, 1.0, blocked=np.ones_like(mask)) == 10.0   # all blocked: as without
+
+
+def test_an_object_entering_after_the_first_frame_is_tracked():
+    from morphosim_gym.priors import flow_tracks
+
+    rng = np.random.default_rng(1)
+    bg = rng.integers(90, 110, (48, 64, 3)).astype(np.uint8)
+    patch = rng.integers(0, 255, (12, 12, 3)).astype(np.uint8)
+    frames = []
+    for i in range(9):
+        f = bg.copy()
+        x0 = 70 - 3 * i                                 # outside the view until frame 3
+        lo, hi = max(x0, 0), min(x0 + 12, 64)
+        if hi > lo:
+            f[20:32, lo:hi] = patch[:, lo - x0:hi - x0]
+        frames.append(f)
+    tracks, visible = flow_tracks(np.stack(frames), spacing=4)
+    # tracks seeded after frame 0 follow the patch at its speed (3 px per frame to the left)
+    on = visible[:, 6] & visible[:, 8] & (tracks[:, 6, 1] > 21) & (tracks[:, 6, 1] < 31) & (tracks[:, 6, 0] > 52)
+    assert on.sum() >= 3
+    assert np.allclose(tracks[on, 8, 0] - tracks[on, 6, 0], -6.0, atol=1.0)

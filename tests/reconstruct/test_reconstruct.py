@@ -154,3 +154,14 @@ def test_interrupted_run_leaves_no_cache_entry(clip, tmp_path):
                          "--out", str(tmp_path / "out.msim")], env=env, capture_output=True, text=True, timeout=600)
     assert ok.returncode == 0, ok.stderr
     assert ms.load_scene(tmp_path / "out.msim").num_frames == clip.num_frames
+
+
+def test_a_single_frame_or_a_still_clip_gives_the_documented_reduced_result(clip):
+    # nothing can be seen to move: the estimated priors hold only the setting, fitted as a static scene
+    tiny = replace(FAST, fit=replace(FAST.fit, iterations=10), features=replace(FAST.features, iterations=5),
+                   complete_iterations=5)
+    for frames, cams in ((clip.frames[:1], clip.cameras[:1]), (np.repeat(clip.frames[:1], 3, 0), clip.cameras[:3])):
+        bare = ms.GeneratedClip(frames=frames, cameras=cams, fps=clip.fps, info={"setting": "road"})
+        scene = reconstruct(bare, tiny)
+        assert [(o.name, o.dynamic) for o in scene.objects] == [("road", False)]
+        assert scene._fit_log["priors"] == {"depth": "estimated", "masks": "estimated", "tracks": "estimated"}
