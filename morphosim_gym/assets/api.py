@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -23,7 +22,7 @@ from ..scene.gaussians import Gaussians
 from ..scene.rotations import matrix_to_quat, quat_multiply
 from .cache import ConversionCache
 from .convert import ConversionParams, mesh_to_gaussians, splat_to_object
-from .errors import AssetError, AssetWarning
+from .errors import AssetError
 from .files import MAX_FILE_BYTES, AssetFiles
 from .frame import UP_ROTATIONS, SizeSpec
 from .index import AssetIndex, default_cache_dir
@@ -92,11 +91,7 @@ def asset_gaussians(asset: AssetRecord | str, budget: int = 20000, size_m: SizeS
         if store is None:
             return _convert(convert, record, files, params)
         key = conversion_key(record, params, files)
-        g = store.get(key)
-        if g is None:
-            g = _convert(convert, record, files, params)
-            _store(store, key, g, record)
-        return g
+        return store.get_or_build(key, lambda: _convert(convert, record, files, params), label=record.id)
     finally:
         files.close()
 
@@ -109,13 +104,6 @@ def _convert(convert: Converter, record: AssetRecord, files: AssetFiles, params:
         raise
     except (ValueError, IndexError, ArithmeticError, MemoryError) as exc:
         raise AssetError(f"Cannot convert {files.label} ({type(exc).__name__}: {exc})") from exc
-
-
-def _store(store: ConversionCache, key: str, g: Gaussians, record: AssetRecord) -> None:
-    try:
-        store.put(key, g)
-    except OSError as exc:   # a read-only or full disk costs the cache, not the result
-        warnings.warn(AssetWarning(f"Could not cache {record.id} in {store.root} ({exc})"), stacklevel=3)
 
 
 def splat_setting(path: str | os.PathLike, up_axis: str = "z", unit_scale: float = 1.0) -> Gaussians:

@@ -29,26 +29,26 @@ def _single_thread() -> None:
 
 
 # ---------------------------------------------------------------------- local
-_RUNNERS: dict[tuple[str, Optional[str]], EpisodeRunner] = {}
+_RUNNERS: dict[tuple[str, Optional[str], bool], EpisodeRunner] = {}
 
 
-def _runner(suite: Suite, cache_dir: Optional[str]) -> EpisodeRunner:
-    key = (suite.digest(), cache_dir)
+def _runner(suite: Suite, cache_dir: Optional[str], strict: bool) -> EpisodeRunner:
+    key = (suite.digest(), cache_dir, strict)
     if key not in _RUNNERS:
-        _RUNNERS[key] = EpisodeRunner(suite, cache_dir)
+        _RUNNERS[key] = EpisodeRunner(suite, cache_dir, strict)
     return _RUNNERS[key]
 
 
-def _prepare_one(suite: Suite, cache_dir: Optional[str], seed: int) -> str:
-    return _runner(suite, cache_dir).prepare(seed)
+def _prepare_one(suite: Suite, cache_dir: Optional[str], strict: bool, seed: int) -> str:
+    return _runner(suite, cache_dir, strict).prepare(seed)
 
 
-def _run_one(suite: Suite, cache_dir: Optional[str], job: Job) -> EpisodeResult:
-    return _runner(suite, cache_dir).run(*job)
+def _run_one(suite: Suite, cache_dir: Optional[str], strict: bool, job: Job) -> EpisodeResult:
+    return _runner(suite, cache_dir, strict).run(*job)
 
 
-def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int
-           ) -> Iterator[EpisodeResult]:
+def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
+           strict: bool) -> Iterator[EpisodeResult]:
     if workers <= 1:
         import numba
 
@@ -56,9 +56,9 @@ def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[
         _single_thread()
         try:
             for seed in seeds:
-                _prepare_one(suite, cache_dir, seed)
+                _prepare_one(suite, cache_dir, strict, seed)
             for job in jobs:
-                yield _run_one(suite, cache_dir, job)
+                yield _run_one(suite, cache_dir, strict, job)
         finally:
             numba.set_num_threads(threads)
         return
@@ -67,9 +67,9 @@ def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[
 
     with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
                              initializer=_single_thread) as pool:
-        for fut in as_completed([pool.submit(_prepare_one, suite, cache_dir, s) for s in seeds]):
+        for fut in as_completed([pool.submit(_prepare_one, suite, cache_dir, strict, s) for s in seeds]):
             fut.result()
-        futures = [pool.submit(_run_one, suite, cache_dir, job) for job in jobs]
+        futures = [pool.submit(_run_one, suite, cache_dir, strict, job) for job in jobs]
         for fut in as_completed(futures):
             yield fut.result()
 
@@ -85,7 +85,7 @@ def _ray() -> Any:
 
 
 def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
-                  address: Optional[str]) -> Iterator[EpisodeResult]:
+                  address: Optional[str], strict: bool) -> Iterator[EpisodeResult]:
     ray = _ray()
     started = False
     if not ray.is_initialized():
@@ -94,19 +94,19 @@ def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Op
         ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False, **kw)
         started = True
     try:
-        yield from _ray_run(ray, suite, seeds, jobs, cache_dir, workers)
+        yield from _ray_run(ray, suite, seeds, jobs, cache_dir, workers, strict)
     finally:
         if started:
             ray.shutdown()
 
 
-def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int
-             ) -> Iterator[EpisodeResult]:
+def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
+             strict: bool) -> Iterator[EpisodeResult]:
     @ray.remote(num_cpus=1)
     class Worker:
-        def __init__(self, suite: Suite, cache_dir: Optional[str]) -> None:
+        def __init__(self, suite: Suite, cache_dir: Optional[str], strict: bool) -> None:
             _single_thread()
-            self.runner = EpisodeRunner(suite, cache_dir)
+            self.runner = EpisodeRunner(suite, cache_dir, strict)
 
         def prepare(self, seeds: list[int]) -> list[str]:
             return [self.runner.prepare(s) for s in seeds]
@@ -116,7 +116,7 @@ def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_di
 
     n = max(1, min(workers, len(jobs) or 1))
     suite_ref = ray.put(suite)
-    actors = [Worker.remote(suite_ref, cache_dir) for _ in range(n)]
+    actors = [Worker.remote(suite_ref, cache_dir, strict) for _ in range(n)]
     ray.get([a.prepare.remote(seeds[i::n]) for i, a in enumerate(actors)])      # each scene generated once
     from ray.util import ActorPool
 
@@ -127,11 +127,12 @@ def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_di
 
 
 def run_backend(backend: str, suite: Suite, seeds: Iterable[int], jobs: Iterable[Job], cache_dir: Optional[str],
-                workers: int = 1, address: Optional[str] = None) -> Iterator[EpisodeResult]:
-    """Generate the scenes of `seeds` once, then run `jobs`, yielding results as they finish."""
+                workers: int = 1, address: Optional[str] = None, strict: bool = False) -> Iterator[EpisodeResult]:
+    """Generate the scenes of `seeds` once, then run `jobs`, yielding results as they finish; `strict`:
+    see `EpisodeRunner`."""
     seeds, jobs = list(seeds), list(jobs)
     if backend == "local":
-        return _local(suite, seeds, jobs, cache_dir, workers)
+        return _local(suite, seeds, jobs, cache_dir, workers, strict)
     if backend == "ray":
-        return _ray_episodes(suite, seeds, jobs, cache_dir, workers, address)
+        return _ray_episodes(suite, seeds, jobs, cache_dir, workers, address, strict)
     raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")

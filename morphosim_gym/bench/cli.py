@@ -43,6 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="scene cache shared by the workers (default $MORPHOSIM_CACHE or ~/.cache/morphosim_gym)")
     p.add_argument("--ray-address", default=None, help="join this Ray cluster instead of starting a local one")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--strict", action="store_true",
+                   help="an episode whose scene prompt has a word the library would substitute (e.g. 'kangaroo' "
+                        "-> duck) fails with that CommandError instead of running on the substitute")
     p.add_argument("--list", action="store_true", help="list the built-in suites and exit")
     p.set_defaults(func=_bench)
 
@@ -97,7 +100,8 @@ def _bench(args: argparse.Namespace) -> int:
             suite = suite.with_episodes(args.episodes)
         out = args.out or f"out/bench/{suite.name}"
         result = run_sweep(suite, args.policy or ["oracle"], out, backend=args.backend, workers=args.workers,
-                           cache_dir=args.cache_dir, address=args.ray_address, progress=not args.no_progress)
+                           cache_dir=args.cache_dir, address=args.ray_address, progress=not args.no_progress,
+                           strict=args.strict)
     except ValueError as exc:
         print(f"morphosim bench: error: {exc}", file=sys.stderr)
         return EXIT_NOT_RUN

@@ -127,15 +127,22 @@ def _text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def make_sim(suite: Suite, cache_dir: Optional[str]) -> Any:
+def _substitutes(sim: Any, prompt: str) -> bool:
+    """Whether the parse of `prompt` substitutes a word (what strict mode refuses)."""
+    from morphosim_gym.language.substitutions import plan_substitutions
+
+    return bool(plan_substitutions(sim.parser.parse(prompt)))
+
+
+def make_sim(suite: Suite, cache_dir: Optional[str], strict: bool = False) -> Any:
     """The envs' default `MorphoSim` (`envs.config.DEFAULT_SIM_CONFIG`), caching generated scenes on
-    disk under `cache_dir` (None = default)."""
+    disk under `cache_dir` (None = default); `strict` makes a substituted word a `CommandError`."""
     from dataclasses import replace
 
     from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
     from morphosim_gym.pipeline import MorphoSim
 
-    return MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir))
+    return MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir, strict=strict))
 
 
 class EpisodeRunner:
@@ -144,11 +151,14 @@ class EpisodeRunner:
     Args:
         suite: the suite.
         cache_dir: the scene cache shared by all workers (None = `MorphoSim`'s default).
+        strict: a scene prompt whose words the library substitutes ("kangaroo" -> duck) fails its
+            episodes at the "scene" stage with the `CommandError` (`SimConfig.strict`).
     """
 
-    def __init__(self, suite: Suite, cache_dir: Optional[str] = None) -> None:
+    def __init__(self, suite: Suite, cache_dir: Optional[str] = None, strict: bool = False) -> None:
         self.suite = suite
-        self.sim = make_sim(suite, cache_dir)
+        self.strict = strict
+        self.sim = make_sim(suite, cache_dir, strict)
         self._env: Any = None
 
     @property
@@ -164,8 +174,11 @@ class EpisodeRunner:
         return self._env
 
     def prepare(self, seed: int) -> str:
-        """Generate (or load) the scene of episode `seed` into the cache; returns its prompt."""
+        """Generate (or load) the scene of episode `seed` into the cache; returns its prompt. In strict
+        mode a prompt with a substitution is skipped here: its episodes record the `CommandError`."""
         ep = sample_episode(self.suite, seed)
+        if self.strict and _substitutes(self.sim, ep.request.prompt):
+            return ep.request.prompt
         self.sim.generate(ep.request.prompt, seed=ep.scene_seed)
         return ep.request.prompt
 

@@ -59,9 +59,9 @@ def _png(frames: np.ndarray) -> bytes:
     return iio.imwrite("<bytes>", np.concatenate(list(frames), axis=1), extension=".png")
 
 
-def _check_manifest(out: Path, suite: Suite) -> None:
+def _check_manifest(out: Path, suite: Suite, strict: bool) -> None:
     path = out / MANIFEST
-    mine = {"suite": suite.name, "digest": suite.digest(), "env": suite.env_id}
+    mine = {"suite": suite.name, "digest": suite.digest(), "env": suite.env_id, "strict": strict}
     if path.exists():
         try:
             theirs = json.loads(path.read_text())
@@ -71,6 +71,9 @@ def _check_manifest(out: Path, suite: Suite) -> None:
             raise SuiteError(f"{out} holds results of suite {theirs.get('suite')!r} with other settings (digest "
                              f"{theirs.get('digest')} vs {mine['digest']}); resume only the same suite, or use "
                              f"another --out")
+        if bool(theirs.get("strict", False)) != strict:
+            raise SuiteError(f"{out} holds results of a sweep run with strict={not strict}; resume it with the same "
+                             f"--strict setting, or use another --out")
         return
     atomic_write_bytes(path, (json.dumps(mine, indent=2) + "\n").encode())
 
@@ -85,8 +88,9 @@ def _check_env(suite: Suite, cache_dir: Optional[str]) -> None:
 
 def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: str = "local", workers: int = 1,
               cache_dir: Optional[str] = None, address: Optional[str] = None, progress: bool = True,
-              report: bool = True) -> SweepResult:
-    """Run (or resume) a sweep of `suite` for each policy spec and write its outputs to `out`."""
+              report: bool = True, strict: bool = False) -> SweepResult:
+    """Run (or resume) a sweep of `suite` for each policy spec and write its outputs to `out`. With
+    `strict`, an episode whose scene prompt has a substituted word fails with the `CommandError`."""
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
     if not policies or len(set(policies)) != len(policies):
@@ -96,7 +100,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
     _check_env(suite, cache_dir)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    _check_manifest(out, suite)
+    _check_manifest(out, suite, strict)
     start = time.perf_counter()
     store = ResultStore(out / RESULTS_LOG)
     done = store.load()
@@ -107,7 +111,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
     bar = _progress(len(plan), len(plan) - len(pending), suite.name, backend) if progress else None
     failed = sum(done[k.id]["status"] != "ok" for k in plan if k.id in done)
     with store:
-        for res in run_backend(backend, suite, seeds, jobs, cache_dir, workers, address):
+        for res in run_backend(backend, suite, seeds, jobs, cache_dir, workers, address, strict):
             key = EpisodeKey(res.record["policy"], res.record["perturbation"], res.record["seed"])
             if res.frames is not None:
                 atomic_write_bytes(frames_path(out, key), _png(res.frames))

@@ -28,7 +28,7 @@ from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
 from ..scene.rotations import matrix_to_quat, quat_multiply
 
-__all__ = ["ASSET_MODES", "ASSET_PREFIX", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
+__all__ = ["ASSET_MODES", "ASSET_PREFIX", "EXCLUDED_WORDS", "SETTING_SKIES", "asset_candidates", "asset_cloud", "asset_index", "pick_asset", "setting_sky",
            "uses_assets"]
 
 ASSET_MODES = ("auto", "off", "require")
@@ -37,6 +37,12 @@ ENV_SOURCES = "MORPHOSIM_ASSET_SOURCES"
 INSTALL_HINT = "apt install sweethome3d-furniture blender-data"
 _log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
+
+# words (of an asset's name or tags) that keep it out of a category's picks: a ceiling or
+# pendant lamp hangs above the frame, so "a lamp" on the ground would show nothing.
+EXCLUDED_WORDS: dict[str, frozenset[str]] = {
+    "lamp": frozenset({"ceiling", "pendant", "hanging", "chandelier"}),
+}
 
 
 def env_sources() -> tuple[str, ...] | None:
@@ -90,9 +96,13 @@ def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRe
     entry = CATEGORIES.get(category)
     synonyms = {w.lower() for w in (entry.synonyms if entry is not None else ()) if " " not in w}
 
+    excluded = EXCLUDED_WORDS.get(category, frozenset())
+
     def matches(r: AssetRecord) -> bool:
         words = _WORD.findall(r.name.lower())
         head = words[-1] if words else ""
+        if excluded & _words(" ".join((r.name, *r.tags))):
+            return False
         return r.category == category or bool(want and want <= _words(r.name)) or head in synonyms
 
     hits = [r for r in index if r.kind in ("mesh", "splat") and matches(r)]
@@ -101,7 +111,8 @@ def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRe
 
 def asset_candidates(category: str) -> tuple[AssetRecord, ...]:
     """Every mesh or splat asset matching a category: same category, or the name holds the words of
-    its name, or its last word is one of its vocabulary synonyms ("person": "Sitting boy"), by id."""
+    its name, or its last word is one of its vocabulary synonyms ("person": "Sitting boy"), by id;
+    never one whose name or tags hold a word of the category's `EXCLUDED_WORDS` (ceiling lamps)."""
     if category.startswith(ASSET_PREFIX):
         aid = category[len(ASSET_PREFIX):]
         index = asset_index()

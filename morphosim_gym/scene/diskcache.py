@@ -32,11 +32,13 @@ def _sweep(directory: Path) -> None:
 
 
 def load_or_build(path: str | os.PathLike, load: Callable[[Path], T], build: Callable[[], T],
-                  save: Callable[[T, Path], object]) -> T:
+                  save: Callable[[T, Path], object],
+                  warning: type[DamagedCacheEntryWarning] = DamagedCacheEntryWarning) -> T:
     """The value stored at `path` if it reads back (its checksums hold), else `build()` saved there.
 
     `load` must raise `SceneFileError` for a file it cannot trust; such an entry is deleted with a
-    `DamagedCacheEntryWarning` naming it, so the next call does not fail on it again.
+    `DamagedCacheEntryWarning` (or the subclass `warning`) naming it, so the next call does not fail
+    on it again.
     """
     path = Path(path)
     if path.exists():
@@ -44,7 +46,7 @@ def load_or_build(path: str | os.PathLike, load: Callable[[Path], T], build: Cal
             return load(path)
         except SceneFileError as exc:
             warnings.warn(f"Discarding a damaged cache entry and building it again: {exc}",
-                          DamagedCacheEntryWarning, stacklevel=3)
+                          warning, stacklevel=3)
             try:
                 path.unlink()
             except FileNotFoundError:

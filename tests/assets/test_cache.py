@@ -79,3 +79,19 @@ def test_unwritable_cache_only_costs_the_caching(quad_dir, tmp_path):
     with pytest.warns(AssetWarning, match="Could not cache"):
         g = asset_gaussians(FolderSource(quad_dir).records()[0], budget=50, cache=cache)
     assert len(g) == 50
+
+
+def test_truncated_entry_is_rebuilt_with_a_damaged_cache_entry_warning(quad_dir, tmp_path):
+    from morphosim_gym.assets.cache import DamagedAssetCacheWarning
+    from morphosim_gym.scene.diskcache import DamagedCacheEntryWarning
+
+    cache = ConversionCache(tmp_path / "conv")
+    record = FolderSource(quad_dir).records()[0]
+    good = asset_gaussians(record, budget=300, cache=cache)
+    (entry,) = _entries(tmp_path / "conv")
+    entry.write_bytes(entry.read_bytes()[:100])                        # a writer killed mid-file
+    with pytest.warns(DamagedCacheEntryWarning, match=str(entry.name)) as caught:
+        rebuilt = asset_gaussians(record, budget=300, cache=cache)
+    assert any(isinstance(w.message, DamagedAssetCacheWarning) for w in caught)
+    assert np.array_equal(rebuilt.means, good.means) and np.array_equal(rebuilt.colors, good.colors)
+    assert _entries(tmp_path / "conv") == [entry] and cache.get(entry.stem) is not None

@@ -194,6 +194,10 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
         return False  # "very small" / "very fast": the phrase tables see both words
     if not stop_word(w) or (w in SPEED_WORDS_1 and nxt is not None and not stop_word(nxt)):
         return False
+    after = toks[j + 2] if j + 2 < len(toks) else None
+    if np_.det is not None and w in VERBS and nxt is not None and not stop_word(nxt) and not known_word(nxt) \
+            and (after in VERBS or after in AUX):
+        return False  # a verb-like word of an unknown compound noun before its verb: "a red go kart moves"
     # nouns that are also verbs: "the park", "a yellow taxi speeds"
     if word_to_setting(w) or noun_to_category(w):
         if not collected and np_.det is not None:

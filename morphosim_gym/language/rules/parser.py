@@ -6,7 +6,7 @@ from typing import Any
 
 from ...errors import CommandError
 from ..grounding import SceneItem, scene_items
-from ..lexicon import COMPOUNDS, EXAMPLES, correct_typo
+from ..lexicon import AUX, COMPOUNDS, EXAMPLES, VERBS, correct_typo
 from ..plan import CameraSpec, EditOp, MotionSpec, ObjectSpec, Plan
 from ..sequence import motion_stages
 from ..vocabulary import CATEGORIES, DEFAULT_SETTING
@@ -41,7 +41,7 @@ class RuleParser(DescriptionReader, TargetResolver):
     # ---- entry -------------------------------------------------------------------------------------
     def parse(self) -> Plan:
         toks = tokenize(self.text)
-        toks = [self._fix_typo(w) for w in toks]
+        toks = [self._fix_typo(w, toks[k + 1] if k + 1 < len(toks) else None) for k, w in enumerate(toks)]
         segments = split_segments(toks)
         if not segments:
             raise CommandError(f"Could not understand {self.text!r}: no words found. Try e.g. " + ", ".join(EXAMPLES))
@@ -63,10 +63,12 @@ class RuleParser(DescriptionReader, TargetResolver):
                 edits.append((detok(seg), ops))
         return self._build(edits)
 
-    def _fix_typo(self, w: str) -> str:
+    def _fix_typo(self, w: str, nxt: str | None = None) -> str:
         if not w.isalpha() or len(w) < 4 or known_word(w):
             return w
         fixed = correct_typo(w)
+        if fixed in VERBS and (nxt in VERBS or nxt in AUX):
+            return w   # an unknown word before a verb is the subject's noun ("a go kart moves"), not a verb typo
         return COMPOUNDS.get(fixed, fixed) if fixed is not None else w
 
     # ---- assemble -----------------------------------------------------------------------------------
