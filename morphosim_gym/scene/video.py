@@ -125,9 +125,9 @@ def _iter_file(path: Path) -> Iterator[np.ndarray]:
     try:
         for frame in iio.imiter(path, plugin=_plugin(path)):
             yield _rgb(frame, str(path))
-    except ValueError:
-        raise
     except Exception as exc:  # noqa: BLE001 - every decoder failure becomes one clear message
+        if isinstance(exc, ValueError) and str(path) in str(exc):
+            raise
         raise ValueError(f"Expected a decodable video, found {path} could not be decoded ({exc})") from exc
 
 
