@@ -23,6 +23,7 @@ import argparse
 import importlib.util
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -113,7 +114,8 @@ def try_edits(scene: Any, label: str) -> dict[str, Any]:
     return out
 
 
-def run_video(name: str, path: Path, out: Path, cache_dir: str | None) -> dict[str, Any]:
+def run_video(name: str, path: Path, out: Path, cache_dir: str | None, budget: dict[str, int],
+              iterations: int | None) -> dict[str, Any]:
     import imageio.v3 as iio
 
     from morphosim_gym.reconstruct.pipeline import ReconstructionConfig, reconstruct
@@ -121,11 +123,14 @@ def run_video(name: str, path: Path, out: Path, cache_dir: str | None) -> dict[s
 
     _, prompt, fov = VIDEOS[name]
     t0 = time.perf_counter()
-    clip = GeneratedClip.from_video(path, fov_deg=fov, prompt=prompt)
+    clip = GeneratedClip.from_video(path, fov_deg=fov, prompt=prompt, **budget)
     read_s = time.perf_counter() - t0
     train_clip, train, held = split(clip)
     t0 = time.perf_counter()
-    scene = reconstruct(train_clip, ReconstructionConfig(cache_dir=cache_dir, progress=False))
+    cfg = ReconstructionConfig(cache_dir=cache_dir, progress=False)
+    if iterations is not None:
+        cfg = replace(cfg, fit=replace(cfg.fit, iterations=iterations))
+    scene = reconstruct(train_clip, cfg)
     fit_s = time.perf_counter() - t0
     scores = score(clip, train_clip, scene, train, held)
     movers = [o for o in scene.objects if o.role != "background"]
@@ -153,14 +158,21 @@ def run_video(name: str, path: Path, out: Path, cache_dir: str | None) -> dict[s
 
 def table(rows: list[dict[str, Any]]) -> str:
     head = (f"{'video':7s} {'frames':>6s} {'size':>8s} {'camera':>6s} {'held-out dB':>11s} {'hold-prev dB':>12s} "
-            f"{'input dB':>8s} {'fit s':>6s}  edits")
+            f"{'input dB':>8s} {'fit s':>6s} {'iters':>6s}  edits")
     lines = [head]
     for r in rows:
         ok = ", ".join(f"{k.split(' ')[0]} {'ok' if v['ok'] else 'FAIL'}" for k, v in r["edits"].items())
         lines.append(f"{r['video']:7s} {r['frames']:6d} {r['size'][0]:>4d}x{r['size'][1]:<3d} {r['camera']:>6s} "
                      f"{r['held_out_psnr']:11.2f} {r['hold_previous_psnr']:12.2f} {r['input_psnr']:8.2f} "
-                     f"{r['fit_s']:6.0f}  {ok}")
+                     f"{r['fit_s']:6.0f} {str(r.get('iterations', '')).split(' ')[0]:>6s}  {ok}")
     return "\n".join(lines)
+
+
+def _threads() -> str:
+    import numba
+    import torch
+
+    return f"torch {torch.get_num_threads()}, numba {numba.get_num_threads()}"
 
 
 def main() -> None:
@@ -168,6 +180,9 @@ def main() -> None:
     ap.add_argument("--out", default="benchmarks/results/video", help="output stem (.json, .txt, _<video>.png)")
     ap.add_argument("--videos", nargs="+", default=list(VIDEOS), choices=list(VIDEOS))
     ap.add_argument("--cache-dir", default=None, help="reconstruction cache (default: the usual one)")
+    ap.add_argument("--size", type=int, default=160, help="longer side of the frames (from_video's default 160)")
+    ap.add_argument("--max-frames", type=int, default=49, help="frame budget (from_video's default 49)")
+    ap.add_argument("--iterations", type=int, default=None, help="fit iterations (default: the config's, 1200)")
     args = ap.parse_args()
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -177,7 +192,9 @@ def main() -> None:
         if path is None:
             skipped[name] = f"not installed ({VIDEOS[name][0]})"
             continue
-        rows.append(run_video(name, path, out, args.cache_dir))
+        budget = {"size": args.size, "max_frames": args.max_frames}
+        rows.append({**run_video(name, path, out, args.cache_dir, budget, args.iterations),
+                     "iterations": args.iterations or "default (1200)", "threads": _threads()})
         print(table(rows[-1:]), flush=True)
     merged = out.with_suffix(".json")           # keep the other videos' rows of an earlier run
     if merged.is_file():
