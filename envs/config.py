@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import os
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Optional
 
@@ -19,6 +20,9 @@ import numpy as np
 
 from morphosim_gym.generate.compose import GenerationConfig
 from morphosim_gym.pipeline import SimConfig
+from morphosim_gym.scene import Scene4D
+
+from .scene_file import check_scene_arg
 
 if TYPE_CHECKING:  # pragma: no cover
     from morphosim_gym.pipeline import MorphoSim
@@ -99,6 +103,7 @@ _CHECKS: dict[str, Callable[[str, Any], Any]] = {     # in the order the errors 
     "prompt": _prompt,
     "scene_seed": _int(0), "scene_pool": _int(1), "pool_seed": _int(0, none_ok=False), "render_threads": _int(1),
     "cameras": _cameras,
+    "scene": check_scene_arg,
     "sim": _sim,
     "depth": _flag, "segmentation": _flag, "terminate_on_success": _flag,
 }
@@ -117,6 +122,7 @@ class EnvConfig:
     task: str | TaskSpec | dict | None = None
     prompt: str | None = None
     target: str | None = None
+    scene: str | os.PathLike | Scene4D | None = None
     scene_seed: int | None = None
     scene_pool: int | None = None
     pool_seed: int = 0
@@ -139,6 +145,10 @@ class EnvConfig:
     def __post_init__(self) -> None:
         for name, check in _CHECKS.items():
             object.__setattr__(self, name, check(name, getattr(self, name)))
+        if self.scene is not None and (self.prompt is not None or self.scene_pool is not None):
+            given = "prompt" if self.prompt is not None else "scene_pool"
+            raise ValueError(f"Expected either scene (one fixed world) or {given}, found both "
+                             f"(scene={self.scene!r}, {given}={getattr(self, given)!r})")
 
     @classmethod
     def from_kwargs(cls, kwargs: Mapping[str, Any], defaults: Optional[Mapping[str, Any]] = None) -> "EnvConfig":

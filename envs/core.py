@@ -20,10 +20,12 @@ from morphosim_gym.render.api import render as render_scene
 from morphosim_gym.rig import AGENT_OBJECT_ID
 from morphosim_gym.scene import Scene4D
 from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
+from morphosim_gym.tasks.spec import SceneRequest
 
 from .config import RENDER_MODES, EnvConfig, env_signature, make_sim, render_backend_of
 from .edits import apply_edit, view_camera_option
 from .options import ResetOptions
+from .scene_file import load_fixed_scene
 from .scenes import SceneChooser, SceneSource
 from .snapshot import EnvSnapshot, restore_snapshot, take_snapshot
 from .spaces import Observations, action_space, check_action, observed_cameras
@@ -58,6 +60,9 @@ class MorphoSimEnv(gym.Env):
         self._sim = make_sim(cfg.sim)
         self._render_backend = render_backend_of(self._sim)
         self._source = SceneSource(self._sim)
+        self._fixed = load_fixed_scene(cfg.scene)            # a bad file or target fails here, at make
+        if self._fixed is not None:
+            self._fixed.resolve_target(self._task, cfg.target)
         cams = observed_cameras(cfg.cameras, self._task.default_cameras, self._rig.camera_names)
         self._observe = Observations(cams, cfg.width, cfg.height, cfg.depth, cfg.segmentation, self._rig)
         self._render_cams = cams + tuple(c for c in (self._task.task_camera,) if c not in cams)
@@ -117,10 +122,15 @@ class MorphoSimEnv(gym.Env):
 
     def _reset(self, opts: ResetOptions) -> tuple[dict, dict]:
         rng = self.np_random
-        request, scene_seed = self._scenes.choose(rng, opts)
-        scene = self._source.get(request.prompt, scene_seed)
         target_name = opts.target if opts.target is not None else self.config.target
-        target = self._task.resolve_target(scene, target_name or request.target or None)
+        if self._fixed is not None and opts.prompt is None:
+            scene, scene_seed = self._fixed.scene, None
+            request = SceneRequest(self._fixed.prompt, target_name or "", "")
+            target = self._fixed.resolve_target(self._task, target_name)
+        else:
+            request, scene_seed = self._scenes.choose(rng, opts)
+            scene = self._source.get(request.prompt, scene_seed)
+            target = self._task.resolve_target(scene, target_name or request.target or None)
         description = request.target_description if request.target_description and not target_name \
             else describe_object(target, scene)
         policy = opts.on_edit_error or self.config.on_edit_error

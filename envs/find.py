@@ -75,6 +75,7 @@ class FindEnv(MorphoSimEnv):
     | `task` | `str \\| TaskSpec \\| dict \\| None` | `None` | task spec: a built-in name, a YAML path, a mapping; None = `"find"` |
     | `prompt` | `str \\| None` | `None` | fixed prompt for every episode instead of the task's scene distribution |
     | `target` | `str \\| None` | `None` | target object name; None = the first moving object (else the first object) |
+    | `scene` | `str \\| os.PathLike \\| Scene4D \\| None` | `None` | one fixed world for every episode: a scene file (`DIR/scene.msim` from `morphosim reconstruct VIDEO --out DIR`) or a `Scene4D`; not with `prompt` or `scene_pool`; a file that is not a scene or a `target` not in it fails at `make` |
     | `scene_seed` | `int \\| None` | `None` | fixed generation seed; None = drawn from the reset seed |
     | `scene_pool` | `int \\| None` | `None` | pre-build this many scenes at construction; resets draw from them |
     | `pool_seed` | `int` | `0` | seed of the scene pool's draws |

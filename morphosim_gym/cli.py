@@ -49,7 +49,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
     "edit": Subcommand("morphosim_gym.generate.cli:register",
                        "edit a scene by language and write it with a before/after video"),
     "reconstruct": Subcommand("morphosim_gym.reconstruct.cli:register",
-                              "fit dynamic Gaussians with a feature field to a clip (.mclip)"),
+                              "fit dynamic Gaussians with a feature field to a clip (.mclip) or a video"),
     "info": Subcommand("morphosim_gym.scene.cli:register", "describe a scene (.msim) or clip (.mclip) file"),
     "export-ply": Subcommand("morphosim_gym.scene.cli:register", "write one frame of a scene as a standard 3DGS .ply"),
     "assets": Subcommand("morphosim_gym.assets.cli:register",

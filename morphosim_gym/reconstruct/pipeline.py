@@ -37,6 +37,7 @@ from .features import FeatureConfig, distill_features
 from .fit import FitConfig, fit
 from .initialize import InitConfig, initialize
 from .lifting import estimate_background_color
+from .video_labels import video_estimators
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
@@ -101,6 +102,9 @@ def cache_key(clip: GeneratedClip, config: ReconstructionConfig) -> str:
     h.update(clip.content_hash().encode())
     h.update(json.dumps(cfg, sort_keys=True, default=str).encode())
     h.update(f"v{CACHE_VERSION}".encode())
+    estimators = video_estimators(clip)        # a video's labels come from its prompt
+    if estimators is not None:
+        h.update(repr(estimators).encode())
     return h.hexdigest()[:32]
 
 
@@ -139,7 +143,7 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
 def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
     start = time.perf_counter()
     source = clip
-    clip = prepare_priors(source, cfg.priors)
+    clip = prepare_priors(source, cfg.priors, estimators=video_estimators(source))
     validate_clip(clip)
     fit_cfg = cfg.fit if cfg.progress else _no_progress(cfg.fit)
     feat_cfg = cfg.features if cfg.progress else _no_progress(cfg.features)

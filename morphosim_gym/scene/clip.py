@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
@@ -93,6 +94,32 @@ class GeneratedClip:
             self.track_visible = vis
         if self.ground_truth is not None and not isinstance(self.ground_truth, Scene4D):
             raise ValueError(f"Expected ground_truth as a Scene4D, found {type(self.ground_truth).__name__}")
+
+    @classmethod
+    def from_video(cls, path: str | Path, fov_deg: float = 50.0, prompt: str | None = None, max_frames: int = 49,
+                   size: int = 160, fps: float | None = None, camera: str = "auto", camera_height: float = 1.6,
+                   pitch_deg: float = 20.0, shot: int | str = "longest") -> "GeneratedClip":
+        """A clip of a real video: an mp4/avi/mov/mkv/webm/gif file or a folder of frames of one size.
+
+        Frames are read within the budget (`scene.video.read_frames`): the longer side shrunk to
+        `size` px, an edited video split at its cuts and the `shot` kept ("longest" or an index),
+        at most `max_frames` frames (every k-th, never sparser than 5 fps; what was done is in
+        `info["video"]`). Cameras (`scene.camera_motion.video_cameras`): `camera="auto"` estimates
+        the rotation of a panning camera from the frames and keeps one camera when it stays under
+        0.5 deg ("still" / "pan" force either); the first frame's camera stands `camera_height` m
+        above the ground plane z = 0, pitched down by `pitch_deg`, with a vertical field of view
+        `fov_deg`. The optional `prompt` names what the video shows ("people walking on a
+        street"): reconstruction labels the moving regions with its first noun and the setting
+        with its setting. No depth, masks or tracks: reconstruction estimates them. `ValueError`
+        naming the file for a video that cannot be decoded, a single frame, frames of different
+        sizes, or a clip shorter than 3 frames.
+
+        Examples:
+            >>> clip = GeneratedClip.from_video("walk.mp4", fov_deg=50, prompt="a person walks")  # doctest: +SKIP
+        """
+        from .video_clip import clip_from_video
+
+        return clip_from_video(path, fov_deg, prompt, max_frames, size, fps, camera, camera_height, pitch_deg, shot)
 
     @property
     def num_frames(self) -> int:
