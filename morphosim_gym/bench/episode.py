@@ -127,14 +127,16 @@ def _text(exc: BaseException) -> str:
 
 
 def make_sim(suite: Suite, cache_dir: Optional[str]) -> Any:
-    """The envs' default `MorphoSim` (`envs.config.DEFAULT_SIM_CONFIG`), caching generated scenes on
-    disk under `cache_dir` (None = default)."""
+    """The `MorphoSim` of the suite's worlds (`suite.world` over the envs' default,
+    `envs.config.DEFAULT_SIM_CONFIG`), caching generated clips and scenes (and, for fit worlds,
+    reconstructions) on disk under `cache_dir` (None = default)."""
     from dataclasses import replace
 
-    from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
     from morphosim_gym.pipeline import MorphoSim
 
-    return MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir))
+    from .suite import world_sim_config
+
+    return MorphoSim(replace(world_sim_config(suite.world), cache=True, cache_dir=cache_dir))
 
 
 class EpisodeRunner:
