@@ -166,8 +166,10 @@ class EpisodeRunner:
 
     def prepare(self, seed: int) -> str:
         """Generate (or load) the scene of episode `seed` into the cache; returns its prompt."""
+        from morphosim_gym.envs.pool import build_one
+
         ep = sample_episode(self.suite, seed)
-        self.sim.generate(ep.request.prompt, seed=ep.scene_seed)
+        build_one(self.sim, ep.request.prompt, ep.scene_seed)      # one thread, as the envs' pools build
         return ep.request.prompt
 
     def run(self, key: EpisodeKey, frames: int = 0, keep_steps: bool = False) -> EpisodeResult:
