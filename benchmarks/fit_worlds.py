@@ -7,7 +7,7 @@ time serial vs parallel.
 1. Pool build: the fit worlds of the first `--pool` episode seeds of the Track suite, built on a
    cold cache once serially (one process, one thread) and once with `--workers` processes
    (`envs.pool.build_scenes`), one after the other in this run; the scenes must be bit-identical.
-2. Sim-to-sim gap: `morphosim bench`'s runner on the Track suite (its base condition and the
+2. Sim-to-sim gap: `morphosim bench`'s runner (policies `--policies`) on the Track suite (its base condition and the
    `--conditions` perturbations) with the same episode seeds, scene prompts and scene seeds in
    both worlds: the oracle worlds (the generator's ground truth, `reconstruction="oracle"`) and
    the fit worlds (`reconstruction="fit"`, preset `--preset`, reconstructed from the clips; the
@@ -86,23 +86,23 @@ def sweep(args: argparse.Namespace, name: str, world: dict, cache_dir: Path, out
 
     suite = _suite(args, world)
     start = time.perf_counter()
-    result = run_sweep(suite, ["oracle"], out_root / name, workers=args.workers, cache_dir=str(cache_dir),
+    result = run_sweep(suite, list(args.policies), out_root / name, workers=args.workers, cache_dir=str(cache_dir),
                        progress=True, report=False)
     return {"wall_s": round(time.perf_counter() - start, 1), "failed": result.failed,
             "errors": sorted({r["error"] for r in result.records if r["error"]})[:5],
-            "records": [{k: r[k] for k in ("perturbation", "seed", "status", "success", "return", "prompt")}
+            "records": [{k: r[k] for k in ("policy", "perturbation", "seed", "status", "success", "return", "prompt")}
                         for r in result.records]}
 
 
-def gap(worlds: dict[str, dict], conditions: list[str]) -> list[dict]:
-    """Per condition: success and return in each world, and the paired fit - oracle difference."""
+def gap(worlds: dict[str, dict], conditions: list[str], policies: list[str]) -> list[dict]:
+    """Per policy and condition: success and return in each world, and the paired fit - oracle difference."""
     from morphosim_gym.bench.stats import bootstrap_mean
 
     rows = []
-    for cond in conditions:
-        by = {w: {r["seed"]: r for r in worlds[w]["records"] if r["perturbation"] == cond and r["status"] == "ok"}
-              for w in worlds}
-        row: dict = {"condition": cond}
+    for policy, cond in ((p, c) for p in policies for c in conditions):
+        by = {w: {r["seed"]: r for r in worlds[w]["records"]
+                  if r["policy"] == policy and r["perturbation"] == cond and r["status"] == "ok"} for w in worlds}
+        row: dict = {"policy": policy, "condition": cond}
         for w, recs in by.items():
             row[w] = {"success": bootstrap_mean([float(r["success"]) for r in recs.values()]).as_dict(),
                       "return": bootstrap_mean([float(r["return"]) for r in recs.values()]).as_dict()}
@@ -122,11 +122,11 @@ def _fmt(i: dict, pct: bool = False) -> str:
 
 
 def table(rows: list[dict]) -> str:
-    head = ("| condition | success, oracle worlds | success, fit worlds | fit - oracle (paired) | return, oracle worlds "
-            "| return, fit worlds | fit - oracle (paired) | n |\n|---|---|---|---|---|---|---|---|")
+    head = ("| policy | condition | success, oracle worlds | success, fit worlds | fit - oracle (paired) | return, oracle worlds "
+            "| return, fit worlds | fit - oracle (paired) | n |\n|---|---|---|---|---|---|---|---|---|")
     lines = [head]
     for r in rows:
-        lines.append(f"| {r['condition']} | {_fmt(r['oracle']['success'], True)} | {_fmt(r['fit']['success'], True)} | "
+        lines.append(f"| {r['policy']} | {r['condition']} | {_fmt(r['oracle']['success'], True)} | {_fmt(r['fit']['success'], True)} | "
                      f"{_fmt(r['paired']['success'], True)} | {_fmt(r['oracle']['return'])} | "
                      f"{_fmt(r['fit']['return'])} | {_fmt(r['paired']['return'])} | {r['paired']['success']['n']} |")
     return "\n".join(lines)
@@ -144,6 +144,9 @@ def main() -> None:
                    help="reconstruction priors: the clip's (ground truth for procedural clips) or estimated")
     p.add_argument("--conditions", nargs="*", default=["recolor_target", "remove_distractor", "camera_shift"],
                    help="Track-suite perturbations besides the base")
+    p.add_argument("--policies", nargs="+", default=["oracle", "color"],
+                   help="policy specs (morphosim_gym.policies): oracle reads the world's target position, color "
+                        "finds the target's colour in the image")
     p.add_argument("--skip-pool", action="store_true", help="skip the serial-vs-parallel build")
     p.add_argument("--out", default=str(RESULTS / "fit_worlds.json"))
     args = p.parse_args()
@@ -155,7 +158,7 @@ def main() -> None:
         pool = None if args.skip_pool else pool_timing(args, worlds["fit"], root / "pool")
         cache = root / "pool" / "parallel"                    # the parallel pool's fits are reused
         runs = {name: sweep(args, name, w, cache, root / "out") for name, w in worlds.items()}
-    rows = gap(runs, ["base"] + list(args.conditions))
+    rows = gap(runs, ["base"] + list(args.conditions), list(args.policies))
     worlds_json = {k: {kk: (vv if isinstance(vv, (str, dict)) else repr(vv)) for kk, vv in v.items()}
                    for k, v in worlds.items()}
     result = {"machine": f"{platform.machine()}, {os.cpu_count()} cores, shared with other jobs (loaded)",

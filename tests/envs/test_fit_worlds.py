@@ -24,13 +24,14 @@ ENV_IDS = ("MorphoSim/Track-v0", "MorphoSim/Reach-v0", "MorphoSim/Find-v0")
 @pytest.fixture(scope="module")
 def fit_sim_config(tmp_path_factory):
     """Fit worlds on tiny clips, reconstructions cached in a folder of this module's own."""
-    return ms.SimConfig(reconstruction="fit", reconstruction_config=TINY_FIT, generation=TINY_CLIP,
+    return ms.SimConfig(reconstruction="fit", reconstruction_config=TINY_FIT, generation=TINY_CLIP, cache=True,
                         cache_dir=str(tmp_path_factory.mktemp("fitcache")))
 
 
 @pytest.fixture(scope="module")
 def fit_scene(fit_sim_config):
-    return ms.MorphoSim(fit_sim_config).generate(PROMPT, seed=0)
+    (scene,) = build_scenes(ms.MorphoSim(fit_sim_config), [(PROMPT, 0)], progress=False)   # as the envs build
+    return scene
 
 
 def test_a_fit_world_carries_a_feature_field(fit_scene):
@@ -150,7 +151,8 @@ def test_a_bench_sweep_runs_in_fit_worlds(tmp_path):
     """Base and recolour episodes of a fixed prompt in fit worlds: the recolour selects by features."""
     from morphosim_gym.bench import load_suite, run_sweep
 
-    suite = load_suite({"name": "fitsmoke", "env": "MorphoSim/Track-v0", "scenes": {"prompt": PROMPT, "target": "ball"},
+    suite = load_suite({"name": "fitsmoke", "env": "MorphoSim/Track-v0", "scenes": {"prompt": "a red {object} moves from left to right", "target": "object", "target_color": None,
+                                   "fields": {"object": ["ball"]}},
                         "env_kwargs": {"width": 32, "height": 32}, "episodes": 1, "frames": 0,
                         "world": {"reconstruction": "fit", "reconstruction_config": "fast",
                                   "generation": {"num_frames": 5, "width": 32, "height": 32}},
@@ -171,3 +173,15 @@ def test_fit_pool_serial_and_parallel_give_identical_scenes(tmp_path):
     serial = build_scenes(sim, keys, workers=1, progress=False)
     parallel = build_scenes(sim, keys, workers=2, progress=False, timeout_s=1200)
     assert [s.content_hash() for s in serial] == [s.content_hash() for s in parallel]
+
+
+@pytest.mark.slow
+def test_the_full_size_fit_world(tmp_path):
+    """The default fit world: the full reconstruction of the envs' default clip (49 frames, 128 px)."""
+    env = gym.make("MorphoSim/Track-v0", prompt=PROMPT, scene_seed=0, scene_pool=1,
+                   sim=ms.SimConfig(reconstruction="fit", generation=ms.GenerationConfig(detail=0.35),
+                                    cache_dir=str(tmp_path)))
+    _, info = env.reset(seed=0, options={"edits": ["make the ball blue"]})
+    assert info["edits"] == ("make the ball blue",)
+    assert env.unwrapped.scene.provenance.reconstruction.startswith("fit:")
+    env.step(env.action_space.sample())
