@@ -40,6 +40,17 @@ def test_a_fit_world_carries_a_feature_field(fit_scene):
     assert "ball" in fit_scene.object_names
 
 
+def test_fit_objects_take_the_prompts_colours(fit_sim_config, fit_scene):
+    """The clip's labels name the objects; the prompt gives their colours, so instructions and edit
+    templates read as in ground-truth worlds ("keep the red ball ...")."""
+    from morphosim_gym.tasks import describe_object
+
+    assert describe_object(fit_scene.object("ball")) == "red ball"
+    env = gym.make("MorphoSim/Track-v0", prompt=PROMPT, target="ball", scene_seed=0, sim=fit_sim_config,
+                   width=32, height=32)
+    assert "red ball" in env.reset(seed=0)[1]["instruction"]
+
+
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_every_env_runs_in_a_fit_world(env_id, fit_sim_config, fit_scene):
     env = gym.make(env_id, prompt=PROMPT, target="ball", scene_seed=0, sim=fit_sim_config, width=32, height=32)
