@@ -27,7 +27,7 @@ from gymnasium.envs.registration import register, registry
 
 __all__ = ["ENV_IDS", "ENTRY_POINTS", "env_id_of", "vector_entry_of", "TrackEnv", "ReachEnv", "FindEnv", "MorphoSimEnv",
            "MorphoSimVectorEnv", "EnvConfig", "LanguagePerturbation", "RGBObservation", "SensorEffects", "AxisRandomization", "make_vec",
-           "register_task"]
+           "register_task", "build_scenes", "ScenePoolError"]
 
 ENTRY_POINTS = {
     "track": "morphosim_gym.envs.track:TrackEnv",
@@ -70,6 +70,8 @@ _LAZY = {
     "make_vec": "morphosim_gym.envs.vector",
     "MorphoSimVectorEnv": "morphosim_gym.envs.native_vector",
     "register_task": "morphosim_gym.envs.vector",
+    "build_scenes": "morphosim_gym.envs.pool",
+    "ScenePoolError": "morphosim_gym.envs.pool",
 }
 
 

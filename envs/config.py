@@ -24,6 +24,8 @@ from morphosim_gym.scene import Scene4D
 
 from .scene_file import check_scene_arg
 
+from .pool import POOL_BACKENDS
+
 if TYPE_CHECKING:  # pragma: no cover
     from morphosim_gym.pipeline import MorphoSim
     from morphosim_gym.tasks import TaskSpec
@@ -91,6 +93,14 @@ def _sim(name: str, value: Any) -> Any:
     return value
 
 
+def _seconds(name: str, value: Any) -> Optional[float]:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"Expected {name} as a number of seconds > 0 or None, found {value!r}")
+    return float(value)
+
+
 def _flag(name: str, value: Any) -> bool:
     return bool(value)
 
@@ -101,7 +111,8 @@ _CHECKS: dict[str, Callable[[str, Any], Any]] = {     # in the order the errors 
     "render_mode": _one_of(RENDER_MODES, none_ok=True),
     "on_edit_error": _one_of(ON_EDIT_ERROR),
     "prompt": _prompt,
-    "scene_seed": _int(0), "scene_pool": _int(1), "pool_seed": _int(0, none_ok=False), "render_threads": _int(1),
+    "scene_seed": _int(0), "scene_pool": _int(1), "pool_seed": _int(0, none_ok=False), "pool_workers": _int(1),
+    "pool_backend": _one_of(POOL_BACKENDS), "pool_timeout_s": _seconds, "render_threads": _int(1),
     "cameras": _cameras,
     "scene": check_scene_arg,
     "sim": _sim,
@@ -126,6 +137,9 @@ class EnvConfig:
     scene_seed: int | None = None
     scene_pool: int | None = None
     pool_seed: int = 0
+    pool_workers: int | None = 1
+    pool_backend: str = "process"
+    pool_timeout_s: float | None = None
     width: int = 84
     height: int = 84
     depth: bool = False
@@ -198,5 +212,10 @@ def make_sim(sim: Any) -> Any:
     if sim is None or isinstance(sim, SimConfig):
         from morphosim_gym.pipeline import MorphoSim
 
-        return MorphoSim(DEFAULT_SIM_CONFIG if sim is None else sim)
+        sim = MorphoSim(DEFAULT_SIM_CONFIG if sim is None else sim)
+    config = getattr(sim, "config", None)
+    if isinstance(config, SimConfig) and config.reconstruction == "fit":
+        from morphosim_gym.reconstruct.presets import resolve_reconstruction_config
+
+        resolve_reconstruction_config(config.reconstruction_config)      # a bad preset name fails at make
     return sim

@@ -73,7 +73,8 @@ class MorphoSimEnv(gym.Env):
         self.observation_space = self._observe.space
         self.action_space = action_space(self._rig)
         self._scenes = SceneChooser(self._task, cfg.prompt, cfg.target, cfg.scene_seed, cfg.scene_pool, cfg.pool_seed)
-        self._scenes.prebuild(self._source)                  # resets from the pool do not generate
+        self._scenes.prebuild(self._source, cfg.pool_workers, cfg.pool_backend,
+                              cfg.pool_timeout_s)            # resets from the pool do not generate
         self._world: Optional[SceneWorld] = None
         self._step_count = 0
         self._edits: list[str] = []

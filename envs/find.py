@@ -79,6 +79,9 @@ class FindEnv(MorphoSimEnv):
     | `scene_seed` | `int \\| None` | `None` | fixed generation seed; None = drawn from the reset seed |
     | `scene_pool` | `int \\| None` | `None` | pre-build this many scenes at construction; resets draw from them |
     | `pool_seed` | `int` | `0` | seed of the scene pool's draws |
+    | `pool_workers` | `int \\| None` | `1` | processes that build the scene pool at construction (1: here; None: one per CPU) |
+    | `pool_backend` | `str` | `"process"` | how the pool is built in parallel: `"process"` (local process pool) or `"ray"` |
+    | `pool_timeout_s` | `float \\| None` | `None` | seconds one pooled scene may take to build; None = `envs.pool.DEFAULT_SCENE_TIMEOUT_S` (3600) |
     | `width` | `int` | `84` | observation image width, pixels |
     | `height` | `int` | `84` | observation image height, pixels |
     | `depth` | `bool` | `False` | add `depth` observations |

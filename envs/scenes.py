@@ -1,5 +1,10 @@
 """Which scene an episode gets: `SceneSource` (scenes by prompt and seed, cached) and
-`SceneChooser` (reset options, the env's prompt, the pre-built pool or the task's distribution)."""
+`SceneChooser` (reset options, the env's prompt, the pre-built pool or the task's distribution).
+
+A pool is built at construction, in parallel when asked (`pool.build_scenes`: a process pool or
+Ray, with a progress bar, every wait bounded), and every pooled scene is checked for the target
+there, so a prompt whose scene lacks the target fails at `make`, not at some later reset.
+"""
 
 from __future__ import annotations
 
@@ -13,6 +18,7 @@ from morphosim_gym.tasks import Task
 from morphosim_gym.tasks.spec import SceneRequest
 
 from .options import ResetOptions
+from .pool import build_one, build_scenes
 
 __all__ = ["SceneSource", "SceneChooser"]
 
@@ -23,7 +29,10 @@ class SceneSource:
     """Scenes by (prompt, seed) through a `MorphoSim`, with an in-memory LRU cache.
 
     With `reconstruction="oracle"` (the envs' default) `MorphoSim.generate` composes the ground
-    truth directly, without rendering the clip frames that path discards.
+    truth directly, without rendering the clip frames that path discards; with "fit" it
+    reconstructs the clip (cached on disk by the reconstruction). Scenes are built with one numba
+    (and torch) thread, here as in `build_many`'s workers, so a scene does not depend on how it
+    was built.
     """
 
     def __init__(self, sim: Any, cache_size: int = 32) -> None:
@@ -43,8 +52,19 @@ class SceneSource:
             self._cache.popitem(last=False)
         return scene
 
+    def build_many(self, keys: list[tuple[str, int]], workers: Optional[int] = 1, backend: str = "process",
+                   timeout_s: Optional[float] = None, progress: Optional[bool] = None) -> list[Scene4D]:
+        """The scenes of (prompt, seed) `keys`, the missing ones built at once (`pool.build_scenes`)
+        and all kept in the cache (which grows to hold them)."""
+        keys = [(str(p), int(s)) for p, s in keys]
+        self.cache_size = max(self.cache_size, len(set(keys)))
+        missing = list(dict.fromkeys(k for k in keys if k not in self._cache))
+        for key, scene in zip(missing, build_scenes(self.sim, missing, workers, backend, progress, timeout_s)):
+            self._cache[key] = scene
+        return [self.get(*k) for k in keys]
+
     def _generate(self, prompt: str, seed: int) -> Scene4D:
-        return self.sim.generate(prompt, seed=seed)
+        return build_one(self.sim, prompt, seed)
 
 
 class SceneChooser:
@@ -70,11 +90,19 @@ class SceneChooser:
                 request = self.request(rng)
                 self.pool.append((request, self._seed(rng, None)))
 
-    def prebuild(self, source: SceneSource) -> None:
-        """Generate the pool's scenes into `source` (and make its cache hold them all)."""
-        source.cache_size = max(source.cache_size, len(self.pool))
-        for request, seed in self.pool:
-            source.get(request.prompt, seed)
+    def prebuild(self, source: SceneSource, workers: Optional[int] = 1, backend: str = "process",
+                 timeout_s: Optional[float] = None) -> None:
+        """Generate the pool's scenes into `source` (`workers` at a time; its cache holds them all),
+        and check that each has its target (`ValueError` naming the prompt otherwise)."""
+        if not self.pool:
+            return
+        scenes = source.build_many([(r.prompt, seed) for r, seed in self.pool], workers, backend, timeout_s)
+        for (request, seed), scene in zip(self.pool, scenes):
+            try:
+                self.task.resolve_target(scene, self.target or request.target or None)
+            except ValueError as exc:
+                raise ValueError(f"Scene pool: the scene of {request.prompt!r} (seed {seed}) has no target: "
+                                 f"{exc}") from None
 
     def request(self, rng: np.random.Generator) -> SceneRequest:
         """The env's prompt, or a draw from the task's scene distribution."""

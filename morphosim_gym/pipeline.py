@@ -52,7 +52,8 @@ class SimConfig:
             minutes on a laptop CPU, cached on disk); "oracle" uses the generator's ground truth
             directly, a fast path for training at scale (no feature field: edits select objects
             by their ids).
-        reconstruction_config: settings of the "fit" reconstruction.
+        reconstruction_config: settings of the "fit" reconstruction: a `ReconstructionConfig`, a
+            preset name ("fast", "full"; `reconstruct.presets`) or None ("full").
         generation: clip size, length and detail.
         render_backend: renderer used for frames, selections and the envs' observations: "cpu"
             (default), "torch" (reference) or "gsplat" (CUDA).
@@ -175,9 +176,10 @@ class MorphoSim:
         if self.config.reconstruction == "fit":
             from dataclasses import replace as _replace
 
-            from .reconstruct import ReconstructionConfig, reconstruct
+            from .reconstruct import reconstruct
+            from .reconstruct.presets import resolve_reconstruction_config
 
-            cfg = self.config.reconstruction_config or ReconstructionConfig()
+            cfg = resolve_reconstruction_config(self.config.reconstruction_config)
             if self.config.cache_dir and cfg.cache_dir is None:
                 cfg = _replace(cfg, cache_dir=str(Path(self.config.cache_dir) / "reconstruct"))
             return reconstruct(clip, cfg)

@@ -64,6 +64,7 @@ RULES: tuple[Rule, ...] = (
     Rule(r"^morphosim view\b|&& morphosim view\b", "serve",
          "serves until Ctrl-C: run until it prints its address and the page answers, then stopped"),
     Rule(r"sim\.reconstruct\(", "slow", "fits a scene to a clip (about a minute)"),
+    Rule(r"reconstruction=\"fit\"", "slow", "fits a pool of scenes for an env (about a minute)"),
     Rule(r"^morphosim warmup\b", "slow", "compiles every numba kernel (about 90 s on 2 cores with a cold cache)"),
     Rule(r"^morphosim collect smoke\b", "slow", "records the 32 episodes of the smoke suite as a dataset"),
     Rule(r"^morphosim collect track\b", "slow",

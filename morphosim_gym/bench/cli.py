@@ -42,6 +42,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--cache-dir", default=None,
                    help="scene cache shared by the workers (default $MORPHOSIM_CACHE or ~/.cache/morphosim_gym)")
     p.add_argument("--ray-address", default=None, help="join this Ray cluster instead of starting a local one")
+    p.add_argument("--reconstruction", choices=["oracle", "fit"], default=None,
+                   help="the worlds: the generator's ground truth, or scenes reconstructed from its clips (with a "
+                        "feature field; edits select through it); default: the suite's 'world' (else oracle)")
+    p.add_argument("--reconstruction-preset", choices=["fast", "full"], default=None,
+                   help="reconstruction settings of fit worlds (morphosim_gym.reconstruct.presets); default: the "
+                        "suite's, else full")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--strict", action="store_true",
                    help="an episode whose scene prompt has a word the library would substitute (e.g. 'kangaroo' "
@@ -98,6 +104,9 @@ def _bench(args: argparse.Namespace) -> int:
         suite = load_suite(args.suite)
         if args.episodes is not None:
             suite = suite.with_episodes(args.episodes)
+        if args.reconstruction is not None or args.reconstruction_preset is not None:
+            suite = suite.with_world(reconstruction=args.reconstruction,
+                                     reconstruction_config=args.reconstruction_preset)
         out = args.out or f"out/bench/{suite.name}"
         result = run_sweep(suite, args.policy or ["oracle"], out, backend=args.backend, workers=args.workers,
                            cache_dir=args.cache_dir, address=args.ray_address, progress=not args.no_progress,

@@ -135,14 +135,17 @@ def _substitutes(sim: Any, prompt: str) -> bool:
 
 
 def make_sim(suite: Suite, cache_dir: Optional[str], strict: bool = False) -> Any:
-    """The envs' default `MorphoSim` (`envs.config.DEFAULT_SIM_CONFIG`), caching generated scenes on
-    disk under `cache_dir` (None = default); `strict` makes a substituted word a `CommandError`."""
+    """The `MorphoSim` of the suite's worlds (`suite.world` over the envs' default,
+    `envs.config.DEFAULT_SIM_CONFIG`), caching generated clips and scenes (and, for fit worlds,
+    reconstructions) on disk under `cache_dir` (None = default); `strict` makes a substituted word a
+    `CommandError`."""
     from dataclasses import replace
 
-    from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
     from morphosim_gym.pipeline import MorphoSim
 
-    return MorphoSim(replace(DEFAULT_SIM_CONFIG, cache=True, cache_dir=cache_dir, strict=strict))
+    from .suite import world_sim_config
+
+    return MorphoSim(replace(world_sim_config(suite.world), cache=True, cache_dir=cache_dir, strict=strict))
 
 
 class EpisodeRunner:
@@ -176,10 +179,12 @@ class EpisodeRunner:
     def prepare(self, seed: int) -> str:
         """Generate (or load) the scene of episode `seed` into the cache; returns its prompt. In strict
         mode a prompt with a substitution is skipped here: its episodes record the `CommandError`."""
+        from morphosim_gym.envs.pool import build_one
+
         ep = sample_episode(self.suite, seed)
         if self.strict and _substitutes(self.sim, ep.request.prompt):
             return ep.request.prompt
-        self.sim.generate(ep.request.prompt, seed=ep.scene_seed)
+        build_one(self.sim, ep.request.prompt, ep.scene_seed)      # one thread, as the envs' pools build
         return ep.request.prompt
 
     def run(self, key: EpisodeKey, frames: int = 0, keep_steps: bool = False) -> EpisodeResult:

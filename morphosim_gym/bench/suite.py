@@ -8,6 +8,9 @@ env: MorphoSim/Track-v0          # which env runs the episodes
 task: track                      # optional: the base task (built-in name or YAML path); default the env's
 scenes: {...}                    # optional: the scene distribution, as in a task file (default the task's)
 env_kwargs: {width: 64}          # optional: keyword arguments of the env (not sim/prompt/target/scene_seed)
+world: {reconstruction: fit, reconstruction_config: fast}   # optional: the worlds (default: the envs'
+                                 # ground truth, envs.config.DEFAULT_SIM_CONFIG); also `generation:
+                                 # {num_frames: 25, width: 64, height: 64}` over the envs' clip settings
 seed: 0                          # episode seeds are seed, seed + 1, ..., seed + episodes - 1
 episodes: 20
 frames: 4                        # frames kept for the report's strips (first seed only; 0 = none)
@@ -53,13 +56,14 @@ from morphosim_gym.tasks import TASK_DIR, TaskSpec, load_task_spec
 from morphosim_gym.tasks.axes import AXES, TEMPLATE_FIELDS
 
 __all__ = ["Suite", "Perturbation", "CameraShift", "SuiteError", "load_suite", "builtin_suite_names", "SUITE_DIR",
-           "ENV_TASKS", "TEMPLATE_FIELDS", "BASE"]
+           "ENV_TASKS", "TEMPLATE_FIELDS", "BASE", "WORLD_KEYS", "world_sim_config"]
 
 SUITE_DIR = TASK_DIR / "suites"
 BASE = "base"
 ENV_TASKS = {env_id_of(kind): kind for kind in ENTRY_POINTS}      # env id -> the task kind it runs
-SUITE_KEYS = ("name", "env", "description", "task", "scenes", "env_kwargs", "seed", "episodes", "frames",
+SUITE_KEYS = ("name", "env", "description", "task", "scenes", "env_kwargs", "world", "seed", "episodes", "frames",
               "axes", "perturbations")
+WORLD_KEYS = ("reconstruction", "reconstruction_config", "generation")
 PERTURBATION_KEYS = ("name", "axis", "description", "edits", "at", "camera")
 CAMERA_KEYS = ("orbit_deg", "pitch_deg", "distance_scale", "fov_y_deg")
 RESERVED_ENV_KWARGS = ("sim", "prompt", "target", "scene_seed", "scene_pool", "task", "render_mode", "on_edit_error",
@@ -128,6 +132,7 @@ class Suite:
     frames: int = 4
     description: str = ""
     source: str = "<mapping>"
+    world: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def seeds(self) -> list[int]:
@@ -153,12 +158,22 @@ class Suite:
 
         return replace(self, episodes=_episodes(episodes, self.source, 1 + len(self.perturbations)))
 
+    def with_world(self, **world: Any) -> "Suite":
+        """The same suite in other worlds (`world` keys: reconstruction, reconstruction_config,
+        generation; None values are left out)."""
+        from dataclasses import replace
+
+        merged = {**self.world, **{k: v for k, v in world.items() if v is not None}}
+        return replace(self, world=_world(merged, self.source))
+
     def digest(self) -> str:
         """A content hash of everything that decides what an episode of a given seed is (not the file
         path, nor which seeds run: a sweep resumed with more episodes keeps the ones it has)."""
         data = {"name": self.name, "env": self.env_id, "task": _spec_dict(self.task),
                 "env_kwargs": dict(self.env_kwargs), "frames": self.frames,
                 "perturbations": [asdict(p) for p in self.perturbations]}
+        if self.world:                         # absent for the default worlds: older digests still hold
+            data["world"] = dict(self.world)
         return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -230,7 +245,45 @@ def _suite_from_dict(d: Any, source: str, base_dir: Path) -> Suite:
     return Suite(name=name, env_id=env_id, task=task, seed=_nonneg_int(d.get("seed", 0), "seed", source),
                  episodes=_episodes(d.get("episodes", 10), source, 1 + len(items)), perturbations=items,
                  env_kwargs=dict(env_kwargs), frames=frames, description=str(d.get("description", "")),
-                 source=source)
+                 source=source, world=_world(d.get("world") or {}, source))
+
+
+def _world(w: Any, source: str) -> dict[str, Any]:
+    """A suite's `world` mapping, checked (the `SimConfig` it makes is built the same way)."""
+    if not isinstance(w, Mapping):
+        raise SuiteError(f"Expected 'world' to be a mapping with keys among {list(WORLD_KEYS)} in suite {source}, "
+                         f"found {w!r}")
+    unknown = sorted(set(w) - set(WORLD_KEYS))
+    if unknown:
+        raise SuiteError(f"Unknown key {unknown[0]!r} in 'world' of suite {source}; expected keys among "
+                         f"{list(WORLD_KEYS)}")
+    out = dict(w)
+    if "generation" in out:
+        if not isinstance(out["generation"], Mapping):
+            raise SuiteError(f"Expected world.generation as a mapping of GenerationConfig fields in suite {source}, "
+                             f"found {out['generation']!r}")
+        out["generation"] = dict(out["generation"])
+    try:
+        world_sim_config(out)
+    except (TypeError, ValueError) as exc:
+        raise SuiteError(f"Invalid 'world' in suite {source}: {exc}") from None
+    return out
+
+
+def world_sim_config(world: Mapping[str, Any]) -> Any:
+    """The `SimConfig` of a suite's worlds: `envs.config.DEFAULT_SIM_CONFIG` with `world` over it."""
+    from dataclasses import replace
+
+    from morphosim_gym.envs.config import DEFAULT_SIM_CONFIG
+    from morphosim_gym.reconstruct.presets import resolve_reconstruction_config
+
+    cfg = DEFAULT_SIM_CONFIG
+    if "generation" in world:
+        cfg = replace(cfg, generation=replace(cfg.generation, **world["generation"]))
+    cfg = replace(cfg, **{k: v for k, v in world.items() if k != "generation"})
+    if cfg.reconstruction == "fit":
+        resolve_reconstruction_config(cfg.reconstruction_config)
+    return cfg
 
 
 def _task(task: Any, scenes: Any, env_id: str, source: str, base_dir: Path) -> TaskSpec:

@@ -36,6 +36,7 @@ from ..scene.diskcache import load_or_build
 from .features import FeatureConfig, distill_features
 from .fit import FitConfig, fit
 from .initialize import InitConfig, initialize
+from .labels import with_prompt_objects
 from .lifting import estimate_background_color
 from .video_labels import video_estimators
 
@@ -136,8 +137,10 @@ def reconstruct(clip: GeneratedClip, config: ReconstructionConfig | None = None)
     if not isinstance(clip, GeneratedClip):
         raise ValueError(f"Expected a GeneratedClip, found {type(clip).__name__}")
     if cfg.cache:
-        return load_or_build(cache_path(clip, cfg), load_scene, lambda: _fit_scene(clip, cfg), save_scene)
-    return _fit_scene(clip, cfg)
+        scene = load_or_build(cache_path(clip, cfg), load_scene, lambda: _fit_scene(clip, cfg), save_scene)
+    else:
+        scene = _fit_scene(clip, cfg)
+    return with_prompt_objects(scene, clip)          # the prompt's categories and colours (after the cache)
 
 
 def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
