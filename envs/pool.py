@@ -23,7 +23,7 @@ import multiprocessing as mp
 import os
 import sys
 import time
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from typing import Any, Callable, Iterator, Optional, Sequence
 
 from morphosim_gym.scene import Scene4D
@@ -67,11 +67,21 @@ def single_threaded(torch_too: bool = True) -> Iterator[None]:
         if torch is not None:
             torch.set_num_threads(1)
         try:
-            yield
+            with _one_blas_thread():       # numpy's BLAS too: its idle threads spin on a busy machine
+                yield
         finally:
             numba.set_num_threads(old_numba)
             if torch is not None:
                 torch.set_num_threads(old_torch)
+
+
+def _one_blas_thread() -> AbstractContextManager:
+    """Limit numpy's BLAS to one thread (threadpoolctl, installed with scikit-learn); a no-op without it."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def build_one(sim: Any, prompt: str, seed: int) -> Scene4D:

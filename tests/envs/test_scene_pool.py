@@ -130,3 +130,20 @@ def test_ray_backend_gives_the_same_scenes():
     remote = build_scenes(sim, PROMPTS[:2], workers=2, backend="ray", progress=False, timeout_s=600)
     assert [s.content_hash() for s in serial] == [s.content_hash() for s in remote]
     assert np.array_equal(serial[0].gaussians.means, remote[0].gaussians.means)
+
+
+def test_builds_run_numba_torch_and_blas_on_one_thread():
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    import numba
+    import torch
+
+    from morphosim_gym.envs.pool import single_threaded
+
+    def blas_threads():
+        return [p["num_threads"] for p in threadpoolctl.threadpool_info() if p["user_api"] == "blas"]
+
+    before = (numba.get_num_threads(), torch.get_num_threads(), blas_threads())
+    with single_threaded():
+        assert numba.get_num_threads() == 1 and torch.get_num_threads() == 1
+        assert blas_threads() and all(n == 1 for n in blas_threads())
+    assert (numba.get_num_threads(), torch.get_num_threads(), blas_threads()) == before
