@@ -4,9 +4,6 @@ local OpenAI-compatible server on 127.0.0.1 (a bounded number of requests, bound
 from __future__ import annotations
 
 import json
-import threading
-import time
-from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import gymnasium as gym
 import numpy as np
@@ -15,58 +12,26 @@ import pytest
 import morphosim_gym as ms
 from morphosim_gym.language.llm import LLMConfig
 from morphosim_gym.language.rules import parse_rules
+from tests.language.chat_server import ChatServer
 
 SMALL = ms.GenerationConfig(width=32, height=32, num_frames=3, detail=0.2, assets="off")
 PROMPT = "a red ball rolls from right to left"
 
 
-class PlanServer:
-    """Answers each chat request with the next scripted plan (a dict, sent as the message content)."""
+class PlanServer(ChatServer):
+    """Answers each chat request with the next scripted plan (a dict, sent as the message content);
+    `prompts` are the user messages it was sent."""
 
     def __init__(self, replies: list[dict]) -> None:
-        self.replies = list(replies)
-        self.requests: list[str] = []
-        outer = self
+        super().__init__([json.dumps(r) for r in replies])
 
-        class Handler(BaseHTTPRequestHandler):
-            def do_POST(self) -> None:  # noqa: N802
-                body = json.loads(self.rfile.read(int(self.headers.get("Content-Length", 0))))
-                outer.requests.append(body["messages"][-1]["content"])
-                if not outer.replies:
-                    self.send_response(500)
-                    self.end_headers()
-                    return
-                content = json.dumps(outer.replies.pop(0))
-                data = json.dumps({"choices": [{"message": {"role": "assistant", "content": content}}]}).encode()
-                self.send_response(200)
-                self.send_header("Content-Type", "application/json")
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
-
-            def log_message(self, *args) -> None:
-                pass
-
-        self.httpd = HTTPServer(("127.0.0.1", 0), Handler)
-        self.httpd.timeout = 0.1
-        self.url = f"http://127.0.0.1:{self.httpd.server_address[1]}/v1"
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._serve, args=(len(replies) + 1,), daemon=True)
-        self._thread.start()
-
-    def _serve(self, n: int) -> None:
-        deadline = time.monotonic() + 60.0           # bounded in time and in requests
-        while len(self.requests) < n and not self._stop.is_set() and time.monotonic() < deadline:
-            self.httpd.handle_request()
+    @property
+    def prompts(self) -> list[str]:
+        return [r["body"]["messages"][-1]["content"] for r in self.requests]
 
     def config(self) -> LLMConfig:
         # fallback="raise": a parse that does not reach the server (or gets no valid plan) fails loudly
         return LLMConfig(base_url=self.url, model="tiny-test", timeout_s=10, fallback="raise", max_retries=0)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2)
-        self.httpd.server_close()
 
 
 @pytest.fixture
@@ -93,7 +58,7 @@ def test_morphosim_parse_and_edit_go_through_the_configured_llm(server_factory):
     plan = sim.parse(PROMPT)
     assert plan.backend == "llm" and plan.mode == "generate" and len(srv.requests) == 1
     edited = sim.edit(scene, "make the ball green")
-    assert len(srv.requests) == 2 and "make the ball green" in srv.requests[1]
+    assert len(srv.requests) == 2 and "make the ball green" in srv.prompts[1]
     ball = scene.gaussians.object_ids == scene.object("ball").id
     np.testing.assert_allclose(edited.gaussians.colors[ball].mean(axis=0), [0.0, 0.0, 1.0], atol=0.2)
     # the rule parser would have made it green: the editor did not bypass the configured parser
