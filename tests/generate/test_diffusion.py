@@ -40,13 +40,7 @@ from morphosim_gym.scene import Camera, GeneratedClip  # noqa: E402
 T_LAT, H_LAT, W_LAT, P = 3, 16, 16, 2  # tiny latents: 3 latent frames (9 video frames), 16 x 16, patch 2
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    """The tiny models are small; keep the shared 2-core machine free."""
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")
 
 
 @pytest.fixture(scope="module")

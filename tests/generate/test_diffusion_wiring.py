@@ -30,12 +30,7 @@ PROMPT = "a red ball rolls from right to left"
 GEN = ms.GenerationConfig(detail=0.3, assets="off")
 
 
-@pytest.fixture(scope="module", autouse=True)
-def one_thread():
-    n = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("torch_one_thread")
 
 
 @pytest.fixture(scope="module")
