@@ -1,0 +1,335 @@
+"""Moving things of a real video as per-frame layers that move with the optical flow, and a clean
+background plate for a still camera.
+
+The scaffold fit (`reconstruct`) moves each instance with a handful of rigid nodes; a video's
+estimated masks make every moving region one instance (a crowd of walkers is one "person"), so
+the fit cannot move walkers apart, and estimated tracks often leave the instance static. Between
+two fitted frames the movers then stay where they were (or ghost), and the held-out frames in
+between score below simply showing the previous frame. `motion_layers` replaces the movers'
+Gaussians of a fitted scene by:
+
+* one layer per fitted frame k and connected moving region: the region's pixels lifted at the
+  depth prior as pixel-sized Gaussians, bound to a node of their own;
+* the node's poses on a timeline of half steps (motion frame 2k is fitted frame k): identity at
+  2k, half the region's median optical flow towards frame k +- 1 at 2k +- 1, and far behind the
+  camera otherwise (hidden). So a fitted frame shows its own layer only, and a time between two
+  fitted frames shows both neighbours' layers moved towards each other along the flow;
+* for a still camera, a background plate: the per-pixel median of the frames over the pixels no
+  moving region covers, drawn just in front of the fitted background (the fitted background keeps
+  what the view never saw, from completion).
+
+The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
+seconds are unchanged); its feature field and objects are the fitted scene's (new Gaussians take
+the mean feature of the Gaussians of their object).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..scene import Camera, GeneratedClip, Gaussians, Motion, Scene4D
+from ..scene.camera_motion import slerp_cameras
+
+__all__ = ["LayerConfig", "LayerPriors", "layer_priors", "motion_layers", "region_flows"]
+
+HIDE_DISTANCE = 1e4      # metres behind the camera a layer waits while it is not shown
+
+
+@dataclass(frozen=True)
+class LayerConfig:
+    """Settings of `motion_layers`.
+
+    Attributes:
+        min_area: moving regions smaller than this many pixels are left out (mask noise).
+        opacity: opacity of the layer and plate Gaussians.
+        scale: Gaussian size as a fraction of the pixel footprint.
+        plate: add the median background plate when the camera is still.
+        plate_offset: the plate sits this fraction of its depth in front of the fitted background.
+        layer_offset: the layers sit this fraction of their depth nearer the camera (in front of the
+            plate, which their feet touch), at the same pixels.
+        refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
+        refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
+    """
+
+    min_area: int = 4
+    opacity: float = 0.98
+    scale: float = 0.15
+    plate: bool = True
+    plate_offset: float = 0.05
+    layer_offset: float = 0.1
+    refine_rounds: int = 3
+    refine_step: float = 1.0
+
+
+@dataclass(frozen=True)
+class LayerPriors:
+    """What the layers are built from: per-frame masks of the moving objects and depths.
+
+    Attributes:
+        masks: [T, H, W] int, object id per pixel (< 0 none); the movers are `movers`.
+        depth: [T, H, W] float camera depth of every pixel (0 unknown).
+        movers: ids of the moving objects.
+    """
+
+    masks: np.ndarray
+    depth: np.ndarray
+    movers: tuple[int, ...]
+
+
+def layer_priors(clip: GeneratedClip, scene: Scene4D) -> LayerPriors:
+    """Masks and depths of a video clip from the same estimators the fit used (labels from its prompt)."""
+    from ..priors import RGBPriorEstimators
+    from .video_labels import video_estimators
+
+    est: Any = video_estimators(clip) or RGBPriorEstimators()
+    out = est.masks(clip.frames, None, [], cameras=clip.cameras)
+    if out is None:
+        t, h, w = clip.frames.shape[:3]
+        return LayerPriors(np.full((t, h, w), -1, np.int32), np.zeros((t, h, w), np.float32), ())
+    masks, _ = out
+    depth = est.depth(clip.frames, list(clip.cameras), masks=masks)
+    movers = tuple(o.id for o in scene.objects if o.role != "background")
+    return LayerPriors(np.asarray(masks), np.asarray(depth, np.float32), movers)
+
+
+def region_flows(frames: np.ndarray, a: int, b: int, labels: np.ndarray, count: int,
+                 search: int | None = None) -> np.ndarray:
+    """[count, 2] image motion (pixels, x y) from frame a to frame b of each labelled region 1..count:
+    the shift within +- `search` px (default an eighth of the width, at least 6) at which the
+    region's own pixels match frame b best (masked template matching; dense optical flow leaves
+    a region's flat interior at zero motion)."""
+    import cv2
+
+    h, w = labels.shape
+    r = int(search if search is not None else max(6, w // 8))
+    fa = np.ascontiguousarray(frames[a]).astype(np.float32)
+    fb = cv2.copyMakeBorder(np.ascontiguousarray(frames[b]).astype(np.float32), r, r, r, r, cv2.BORDER_REPLICATE)
+    out = np.zeros((count, 2))
+    for reg in range(1, count + 1):
+        ys, xs = np.nonzero(labels == reg)
+        if len(ys) == 0:
+            continue
+        y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+        patch = fa[y0:y1, x0:x1]
+        mask = (labels[y0:y1, x0:x1] == reg).astype(np.float32)
+        window = fb[y0:y1 + 2 * r, x0:x1 + 2 * r]
+        cost = cv2.matchTemplate(window, patch, cv2.TM_SQDIFF, mask=np.repeat(mask[..., None], 3, axis=-1))
+        dy, dx = np.unravel_index(int(np.argmin(cost)), cost.shape)
+        out[reg - 1] = (dx - r, dy - r)
+    return out
+
+
+def _lift(camera: Camera, rows: np.ndarray, cols: np.ndarray, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World points of pixels and their footprints (metres per pixel at their depth)."""
+    uv = np.stack([cols + 0.5, rows + 0.5], axis=-1)
+    return camera.unproject(uv, depth), depth / camera.fx
+
+
+def _displacement(cams: tuple[Camera, ...], a: int, b: int, centre: np.ndarray, z: float, flow: np.ndarray) -> np.ndarray:
+    """World displacement of a point seen at pixel `centre` in frame a, at `centre + flow` in frame b (same depth)."""
+    pa = cams[a].unproject(centre, np.float64(z))
+    pb = cams[b].unproject(centre + flow, np.float64(z))
+    return pb - pa
+
+
+def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig) -> dict[str, np.ndarray]:
+    """The movers' Gaussians of every frame and their nodes' translations on the half-step timeline."""
+    import cv2
+
+    t = clip.num_frames
+    cams = clip.cameras
+    moving = np.isin(priors.masks, priors.movers) & (priors.depth > 0)
+    parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
+    trans: list[np.ndarray] = []
+    for k in range(t):
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(moving[k].astype(np.uint8), connectivity=8)
+        keep = [r for r in range(1, count) if stats[r, cv2.CC_STAT_AREA] >= cfg.min_area]
+        if not keep:
+            continue
+        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1) for d in (-1, 1) if 0 <= k + d < t}
+        hide = -cams[k].forward * HIDE_DISTANCE
+        for r in keep:
+            rows, cols = np.nonzero(labels == r)
+            z = priors.depth[k, rows, cols].astype(np.float64) * (1.0 - cfg.layer_offset)
+            pts, fp = _lift(cams[k], rows, cols, z)
+            node = len(trans)
+            path = np.repeat(hide[None], 2 * t - 1, axis=0)
+            path[2 * k] = 0.0
+            centre = np.array([cols.mean() + 0.5, rows.mean() + 0.5])
+            for d, fl in flows.items():
+                path[2 * k + d] = 0.5 * _displacement(cams, k, k + d, centre, float(np.median(z)), fl[r - 1])
+            trans.append(path)
+            parts["means"].append(pts)
+            parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
+            parts["footprint"].append(fp)
+            parts["ids"].append(priors.masks[k, rows, cols])
+            parts["node"].append(np.full(len(rows), node))
+            parts["pixel"].append(np.stack([np.full(len(rows), k), rows, cols], axis=1))
+    if not trans:
+        return {}
+    out = {k: np.concatenate(v) for k, v in parts.items()}
+    out["trans"] = np.stack(trans, axis=1)                     # [2T - 1, K, 3]
+    return out
+
+
+def _plate(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerConfig) -> dict[str, np.ndarray]:
+    """Median background of a still camera over the pixels no mover covers, a little in front of the fit."""
+    moving = np.isin(priors.masks, priors.movers)
+    frames = np.where(moving[..., None], np.nan, clip.frames.astype(np.float64))
+    with np.errstate(all="ignore"):
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            plate = np.nanmedian(frames, axis=0)
+    plate = np.where(np.isnan(plate), np.median(clip.frames, axis=0), plate)
+    depth = np.max(np.where(moving, 0.0, priors.depth), axis=0)
+    rows, cols = np.nonzero(depth > 0)
+    z = depth[rows, cols].astype(np.float64) * (1.0 - cfg.plate_offset)
+    pts, fp = _lift(clip.cameras[0], rows, cols, z)
+    return {"means": pts, "colors": plate[rows, cols] / 255.0, "footprint": fp, "ids": np.full(len(rows), setting),
+            "pixel": np.stack([np.zeros(len(rows), int), rows, cols], axis=1), "image": plate / 255.0}
+
+
+def _gaussians(part: dict[str, np.ndarray], cfg: LayerConfig, features: np.ndarray | None) -> Gaussians:
+    n = len(part["means"])
+    s = np.repeat(part["footprint"][:, None] * cfg.scale, 3, axis=1)
+    return Gaussians(means=part["means"].astype(np.float32), quats=np.tile([1.0, 0, 0, 0], (n, 1)).astype(np.float32),
+                     scales=s.astype(np.float32), opacities=np.full(n, cfg.opacity, np.float32),
+                     colors=np.clip(part["colors"], 0, 1).astype(np.float32), features=features,
+                     object_ids=part["ids"].astype(np.int32))
+
+
+def _object_features(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
+    """[len(ids), D] mean feature of each id's Gaussians in `g` (None without features)."""
+    if g.features is None:
+        return None
+    f = np.asarray(g.features)
+    mean = f.mean(axis=0)
+    out = []
+    for i in ids:
+        sel = np.asarray(g.object_ids) == i
+        out.append(f[sel].mean(axis=0) if sel.any() else mean)
+    return np.asarray(out, np.float32).reshape(len(ids), f.shape[1])
+
+
+def _concat(parts: list[Gaussians]) -> Gaussians:
+    names = ("means", "quats", "scales", "opacities", "colors", "object_ids")
+    cat = {n: np.concatenate([np.asarray(getattr(p, n)) for p in parts]) for n in names}
+    feats = None
+    if all(p.features is not None for p in parts):
+        feats = np.concatenate([np.asarray(p.features) for p in parts]).astype(np.float32)
+    return Gaussians(**cat, features=feats)
+
+
+def _half_step_cameras(cams: tuple[Camera, ...]) -> tuple[Camera, ...]:
+    if len({c.world_to_camera.tobytes() for c in cams}) == 1:
+        return (cams[0],)
+    times = list(range(len(cams)))
+    return tuple(slerp_cameras(cams, times, 0.5 * j) for j in range(2 * len(cams) - 1))
+
+
+def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], layers: dict[str, np.ndarray],
+              movers: tuple[int, ...]) -> Scene4D:
+    """The output scene: `parts` concatenated (the layers' Gaussians last), their motion, cameras, fps."""
+    gaussians = _concat(parts)
+    n = len(gaussians)
+    skin_nodes = np.full((n, 1), -1, np.int32)
+    skin_weights = np.zeros((n, 1), np.float32)
+    if not layers:
+        motion = Motion(np.tile([1.0, 0, 0, 0], (1, 0, 1)), np.zeros((1, 0, 3)), skin_nodes, skin_weights,
+                        np.zeros(0, np.int32))
+        return Scene4D(gaussians, motion, scene.objects, clip.fps, (clip.cameras[0],), decoders=scene.decoders,
+                       provenance=scene.provenance, background=scene.background, sky=scene.sky, sensor=scene.sensor)
+    m = len(layers["means"])
+    skin_nodes[n - m:, 0] = layers["node"]
+    skin_weights[n - m:, 0] = 1.0
+    trans = layers["trans"]
+    rotations = np.zeros(trans.shape[:2] + (4,))
+    rotations[..., 0] = 1.0
+    first = np.unique(layers["node"], return_index=True)[1]
+    node_objects = layers["ids"][first].astype(np.int32)
+    motion = Motion(rotations, trans, skin_nodes, skin_weights, node_objects)
+    objects = tuple(replace(o, dynamic=o.id in movers) for o in scene.objects)
+    return Scene4D(gaussians, motion, objects, clip.fps * 2.0, _half_step_cameras(clip.cameras),
+                   decoders=scene.decoders, provenance=scene.provenance, background=scene.background, sky=scene.sky,
+                   sensor=scene.sensor)
+
+
+def _render(scene: Scene4D, camera: Camera, t: float) -> np.ndarray:
+    from ..render import render
+
+    return np.clip(np.asarray(render(scene, camera, t=t).rgb, np.float64), 0.0, 1.0)
+
+
+def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice], pixels: dict[str, np.ndarray],
+                    targets: dict[str, np.ndarray], rounds: int, step_size: float = 1.0) -> Scene4D:
+    """Undo the renderer's blur on the plate and layer colours: each round adds every Gaussian's
+    pixel residual (its frame minus the render there) to its colour (Van Cittert iteration)."""
+    for _ in range(rounds):
+        colors = np.array(scene.gaussians.colors, np.float64)
+        for name, sl in spans.items():
+            px = pixels[name]
+            for k in np.unique(px[:, 0]):
+                sel = np.flatnonzero(px[:, 0] == k)
+                cam = clip.cameras[int(k)]
+                img = _render(scene, cam, float(k) / clip.fps)
+                target = targets[name] if name == "plate" else clip.frames[int(k)] / 255.0
+                rows, cols = px[sel, 1], px[sel, 2]
+                step = target[rows, cols] - img[rows, cols]
+                if name == "plate" and "plate_free" in targets:     # under frame 0's movers: left as is
+                    step *= targets["plate_free"][rows, cols, None]
+                colors[sl.start + sel] += step_size * step
+        g = scene.gaussians.replace(colors=np.clip(colors, 0.0, 1.0).astype(np.float32))
+        scene = Scene4D(g, scene.motion, scene.objects, scene.fps, scene.cameras, decoders=scene.decoders,
+                        provenance=scene.provenance, background=scene.background, sky=scene.sky, sensor=scene.sensor)
+    return scene
+
+
+def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | None = None,
+                  config: LayerConfig | None = None) -> Scene4D:
+    """`scene` (fitted to `clip`) with its movers replaced by flow-moved per-frame layers and, for a
+    still camera, a median background plate (see the module docstring). A scene without movers,
+    or a clip of one frame, gets only the plate (still camera)."""
+    cfg = config or LayerConfig()
+    if scene.motion.num_frames not in (1, clip.num_frames):
+        raise ValueError(f"Expected a scene fitted to the clip ({clip.num_frames} frames), found "
+                         f"{scene.motion.num_frames} motion frames")
+    pri = priors or layer_priors(clip, scene)
+    g = scene.gaussians
+    all_ids = np.array(sorted({o.id for o in scene.objects}), np.int64)
+    feats = _object_features(g, all_ids)
+    table = None
+    if feats is not None:
+        table = np.zeros((int(all_ids.max()) + 1, feats.shape[1]), np.float32)
+        table[all_ids] = feats
+    parts = [g.subset(~np.isin(np.asarray(g.object_ids), pri.movers))]
+    spans: dict[str, slice] = {}
+    pixels: dict[str, np.ndarray] = {}
+    targets: dict[str, np.ndarray] = {}
+    setting = [o.id for o in scene.objects if o.role == "background"]
+    still = len({c.world_to_camera.tobytes() for c in clip.cameras}) == 1
+    if cfg.plate and still and setting and clip.num_frames > 1:
+        plate = _plate(clip, pri, setting[0], cfg)
+        start = sum(len(p) for p in parts)
+        parts.append(_gaussians(plate, cfg, None if table is None else table[plate["ids"]]))
+        spans["plate"], pixels["plate"], targets["plate"] = slice(start, start + len(plate["means"])), plate["pixel"], \
+            plate["image"]
+        targets["plate_free"] = (~np.isin(pri.masks[0], pri.movers)).astype(np.float64)
+    layers = _layers(clip, pri, cfg) if pri.movers and clip.num_frames > 1 else {}
+    if layers:
+        layers["ids"] = np.where(np.isin(layers["ids"], all_ids), layers["ids"], pri.movers[0])
+        start = sum(len(p) for p in parts)
+        parts.append(_gaussians(layers, cfg, None if table is None else table[layers["ids"]]))
+        spans["layers"], pixels["layers"] = slice(start, start + len(layers["means"])), layers["pixel"]
+    out = _assemble(scene, clip, parts, layers, pri.movers)
+    return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step) \
+        if cfg.refine_rounds else out
+
+
+def _take(g: Gaussians, keep: np.ndarray) -> Gaussians:
+    sel = {n: np.asarray(getattr(g, n))[keep] for n in ("means", "quats", "scales", "opacities", "colors", "object_ids")}
+    return Gaussians(**sel, features=None if g.features is None else np.asarray(g.features)[keep])
