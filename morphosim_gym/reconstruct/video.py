@@ -3,10 +3,9 @@ fits a `Scene4D` with a feature field (`reconstruct`, priors estimated from the 
 `out_dir/scene.msim`, `out_dir/preview.png` (input frames over their renders) and
 `out_dir/info.json` (how the video was read, the cameras, the objects, the time taken).
 
-`fit_video(clip)` is the fit itself: `reconstruct`, and for a still camera the movers replaced by
-flow-moved per-frame layers over a median background plate (`video_layers.motion_layers`; on
-vtest.avi this lifts held-out-frame PSNR above holding the previous frame). A panning camera keeps
-the scaffold fit as it is (layers did not help there: its error is in the camera estimate)."""
+`fit_video(clip)` is the fit itself: `reconstruct`, then `video_layers.motion_layers` (the movers
+as per-frame layers moved between the fitted frames; for a still camera over a median background
+plate). On vtest.avi this lifts held-out-frame PSNR above holding the previous frame."""
 
 from __future__ import annotations
 
@@ -55,17 +54,12 @@ def preview_strip(clip: GeneratedClip, scene: Scene4D, count: int = 3) -> np.nda
     return np.concatenate([top, bottom], axis=0)
 
 
-def still_camera(clip: GeneratedClip) -> bool:
-    """True when every frame of the clip has the same camera."""
-    return len({c.world_to_camera.tobytes() for c in clip.cameras}) == 1
-
-
 def fit_video(clip: GeneratedClip, config: ReconstructionConfig | None = None,
               layers: LayerConfig | None = LayerConfig()) -> Scene4D:
-    """The scene of a video clip: `reconstruct(clip, config)`, then for a still camera
-    `motion_layers` (None: the scaffold fit alone)."""
+    """The scene of a video clip: `reconstruct(clip, config)`, then `motion_layers` with `layers`
+    (None: the scaffold fit alone)."""
     scene = reconstruct(clip, config)
-    if layers is None or not still_camera(clip) or clip.num_frames < 2:
+    if layers is None or clip.num_frames < 2:
         return scene
     return motion_layers(scene, clip, config=layers)
 

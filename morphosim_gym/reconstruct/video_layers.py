@@ -1,26 +1,30 @@
-"""Moving things of a real video as per-frame layers that move with the optical flow, and a clean
-background plate for a still camera.
+"""Moving things of a real video as per-frame layers that move between the fitted frames, and a
+clean background plate for a still camera.
 
 The scaffold fit (`reconstruct`) moves each instance with a handful of rigid nodes; a video's
 estimated masks make every moving region one instance (a crowd of walkers is one "person"), so
-the fit cannot move walkers apart, and estimated tracks often leave the instance static. Between
-two fitted frames the movers then stay where they were (or ghost), and the held-out frames in
-between score below simply showing the previous frame. `motion_layers` replaces the movers'
-Gaussians of a fitted scene by:
+the fit cannot move walkers apart, and the estimated tracks often leave the instance static.
+Between two fitted frames the movers then stay where they were (smeared), and held-out frames in
+between score below simply showing the previous frame. `motion_layers` adds to a fitted scene:
 
 * one layer per fitted frame k and connected moving region: the region's pixels lifted at the
-  depth prior as pixel-sized Gaussians, bound to a node of their own;
+  depth prior (a little nearer the camera) as pixel-sized Gaussians, bound to a node of their own;
 * the node's poses on a timeline of half steps (motion frame 2k is fitted frame k): identity at
-  2k, half the region's median optical flow towards frame k +- 1 at 2k +- 1, and far behind the
-  camera otherwise (hidden). So a fitted frame shows its own layer only, and a time between two
-  fitted frames shows both neighbours' layers moved towards each other along the flow;
+  2k, half the region's image motion towards frame k +- 1 (masked template matching,
+  `region_flows`) at 2k +- 1, and far behind the camera otherwise (hidden). So a fitted frame
+  shows its own layer, and the time half-way between two fitted frames shows both neighbours'
+  layers moved towards each other;
 * for a still camera, a background plate: the per-pixel median of the frames over the pixels no
-  moving region covers, drawn just in front of the fitted background (the fitted background keeps
-  what the view never saw, from completion).
+  moving region covers, in front of the fitted background (which keeps what the view never saw,
+  from completion), and the fit's own mover Gaussians dropped; a moving camera has no plate and
+  keeps them behind the layers;
+* colours refined against the frames through the renderer (its blur undone, `refine_rounds`).
 
 The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
-seconds are unchanged); its feature field and objects are the fitted scene's (new Gaussians take
-the mean feature of the Gaussians of their object).
+seconds are unchanged; the fitted nodes are resampled); its feature field and objects are the
+fitted scene's (new Gaussians take the mean feature of their object's Gaussians, so edits select
+them). Layers are pixel-thin cut-outs facing the input view: a novel view far from it sees them
+edge-on.
 """
 
 from __future__ import annotations
@@ -51,6 +55,9 @@ class LayerConfig:
         layer_offset: the layers sit this fraction of their depth nearer the camera (in front of the
             plate, which their feet touch), at the same pixels.
         refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
+        search: how far a region's motion is searched for between fitted frames, as a fraction of the width.
+        keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: for a
+            moving camera, which has no plate to show behind them; a still camera drops them).
         refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
     """
 
@@ -60,7 +67,9 @@ class LayerConfig:
     plate: bool = True
     plate_offset: float = 0.05
     layer_offset: float = 0.1
+    search: float = 0.125
     refine_rounds: int = 3
+    keep_movers: bool | None = None
     refine_step: float = 1.0
 
 
@@ -149,7 +158,8 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig) -> dict[
         keep = [r for r in range(1, count) if stats[r, cv2.CC_STAT_AREA] >= cfg.min_area]
         if not keep:
             continue
-        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1) for d in (-1, 1) if 0 <= k + d < t}
+        reach = max(6, int(round(cfg.search * clip.width)))
+        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1, reach) for d in (-1, 1) if 0 <= k + d < t}
         hide = -cams[k].forward * HIDE_DISTANCE
         for r in keep:
             rows, cols = np.nonzero(labels == r)
@@ -225,6 +235,10 @@ def _concat(parts: list[Gaussians]) -> Gaussians:
     return Gaussians(**cat, features=feats)
 
 
+def _still(clip: GeneratedClip) -> bool:
+    return len({c.world_to_camera.tobytes() for c in clip.cameras}) == 1
+
+
 def _half_step_cameras(cams: tuple[Camera, ...]) -> tuple[Camera, ...]:
     if len({c.world_to_camera.tobytes() for c in cams}) == 1:
         return (cams[0],)
@@ -232,29 +246,44 @@ def _half_step_cameras(cams: tuple[Camera, ...]) -> tuple[Camera, ...]:
     return tuple(slerp_cameras(cams, times, 0.5 * j) for j in range(2 * len(cams) - 1))
 
 
-def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], layers: dict[str, np.ndarray],
-              movers: tuple[int, ...]) -> Scene4D:
-    """The output scene: `parts` concatenated (the layers' Gaussians last), their motion, cameras, fps."""
+def _half_step_motion(motion: Motion, keep: np.ndarray, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                              np.ndarray, np.ndarray]:
+    """The fitted motion of the kept Gaussians resampled at `frames` half steps: node rotations
+    [F, K, 4], translations [F, K, 3], node objects [K], skin nodes and weights of the kept rows."""
+    poses = [motion.node_poses(0.5 * j) for j in range(frames)]
+    rot = np.stack([p[0] for p in poses]).reshape(frames, motion.num_nodes, 4)
+    tr = np.stack([p[1] for p in poses]).reshape(frames, motion.num_nodes, 3)
+    return rot, tr, motion.node_objects, motion.skin_nodes[keep], motion.skin_weights[keep]
+
+
+def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep: np.ndarray,
+              layers: dict[str, np.ndarray], movers: tuple[int, ...]) -> Scene4D:
+    """The output scene: `parts` concatenated (the fitted Gaussians kept first, the layers' last),
+    the kept ones moving as fitted and the layers on their own nodes, on the half-step timeline."""
     gaussians = _concat(parts)
     n = len(gaussians)
-    skin_nodes = np.full((n, 1), -1, np.int32)
-    skin_weights = np.zeros((n, 1), np.float32)
-    if not layers:
-        motion = Motion(np.tile([1.0, 0, 0, 0], (1, 0, 1)), np.zeros((1, 0, 3)), skin_nodes, skin_weights,
-                        np.zeros(0, np.int32))
-        return Scene4D(gaussians, motion, scene.objects, clip.fps, (clip.cameras[0],), decoders=scene.decoders,
-                       provenance=scene.provenance, background=scene.background, sky=scene.sky, sensor=scene.sensor)
-    m = len(layers["means"])
-    skin_nodes[n - m:, 0] = layers["node"]
-    skin_weights[n - m:, 0] = 1.0
-    trans = layers["trans"]
-    rotations = np.zeros(trans.shape[:2] + (4,))
-    rotations[..., 0] = 1.0
-    first = np.unique(layers["node"], return_index=True)[1]
-    node_objects = layers["ids"][first].astype(np.int32)
-    motion = Motion(rotations, trans, skin_nodes, skin_weights, node_objects)
-    objects = tuple(replace(o, dynamic=o.id in movers) for o in scene.objects)
-    return Scene4D(gaussians, motion, objects, clip.fps * 2.0, _half_step_cameras(clip.cameras),
+    frames = 2 * clip.num_frames - 1 if layers else 1
+    rot, tr, node_objects, kept_nodes, kept_weights = _half_step_motion(scene.motion, keep, frames)
+    slots = max(1, kept_nodes.shape[1])
+    skin_nodes = np.full((n, slots), -1, np.int32)
+    skin_weights = np.zeros((n, slots), np.float32)
+    skin_nodes[:len(kept_nodes), :kept_nodes.shape[1]] = kept_nodes
+    skin_weights[:len(kept_nodes), :kept_nodes.shape[1]] = kept_weights
+    objects = scene.objects
+    if layers:
+        m, k0 = len(layers["means"]), rot.shape[1]
+        skin_nodes[n - m:, 0] = layers["node"] + k0
+        skin_weights[n - m:, 0] = 1.0
+        count = layers["trans"].shape[1]
+        identity = np.zeros((frames, count, 4))
+        identity[..., 0] = 1.0
+        rot, tr = np.concatenate([rot, identity], axis=1), np.concatenate([tr, layers["trans"]], axis=1)
+        first = np.unique(layers["node"], return_index=True)[1]
+        node_objects = np.concatenate([node_objects, layers["ids"][first]]).astype(np.int32)
+        objects = tuple(replace(o, dynamic=o.dynamic or o.id in movers) for o in scene.objects)
+    motion = Motion(rot, tr, skin_nodes, skin_weights, node_objects)
+    cameras = _half_step_cameras(clip.cameras) if layers else scene.cameras
+    return Scene4D(gaussians, motion, objects, clip.fps * (2.0 if layers else 1.0), cameras,
                    decoders=scene.decoders, provenance=scene.provenance, background=scene.background, sky=scene.sky,
                    sensor=scene.sensor)
 
@@ -306,13 +335,14 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     if feats is not None:
         table = np.zeros((int(all_ids.max()) + 1, feats.shape[1]), np.float32)
         table[all_ids] = feats
-    parts = [g.subset(~np.isin(np.asarray(g.object_ids), pri.movers))]
+    keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
+    keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
+    parts = [g.subset(keep)]
     spans: dict[str, slice] = {}
     pixels: dict[str, np.ndarray] = {}
     targets: dict[str, np.ndarray] = {}
     setting = [o.id for o in scene.objects if o.role == "background"]
-    still = len({c.world_to_camera.tobytes() for c in clip.cameras}) == 1
-    if cfg.plate and still and setting and clip.num_frames > 1:
+    if cfg.plate and _still(clip) and setting and clip.num_frames > 1:
         plate = _plate(clip, pri, setting[0], cfg)
         start = sum(len(p) for p in parts)
         parts.append(_gaussians(plate, cfg, None if table is None else table[plate["ids"]]))
@@ -325,7 +355,7 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
         start = sum(len(p) for p in parts)
         parts.append(_gaussians(layers, cfg, None if table is None else table[layers["ids"]]))
         spans["layers"], pixels["layers"] = slice(start, start + len(layers["means"])), layers["pixel"]
-    out = _assemble(scene, clip, parts, layers, pri.movers)
+    out = _assemble(scene, clip, parts, keep, layers, pri.movers)
     return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step) \
         if cfg.refine_rounds else out
 

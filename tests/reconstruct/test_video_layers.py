@@ -100,3 +100,19 @@ def test_a_scene_of_another_clip_is_refused():
     scene = _fitted(clip)
     with pytest.raises(ValueError, match="fitted to the clip"):
         motion_layers(scene, other, priors=pri)
+
+
+def test_kept_fitted_movers_keep_their_motion_on_the_half_step_timeline():
+    clip, pri = _clip()
+    fitted = _fitted(clip)
+    rot = np.tile([1.0, 0, 0, 0], (T, 1, 1))
+    trans = np.zeros((T, 1, 3))
+    trans[:, 0, 0] = np.arange(T) * 0.2                      # the fitted person node walks along x
+    motion = Motion(rot, trans, np.array([[-1], [0]]), np.array([[0.0], [1.0]]), np.array([1]))
+    fitted = Scene4D(fitted.gaussians, motion, fitted.objects, clip.fps, fitted.cameras)
+    scene = motion_layers(fitted, clip, priors=pri, config=LayerConfig(keep_movers=True))
+    assert len(np.asarray(scene.gaussians.object_ids)) > len(fitted.gaussians)
+    np.testing.assert_allclose(scene.motion.translations[:, 0, 0], np.arange(2 * T - 1) * 0.1, atol=1e-9)
+    assert scene.motion.skin_nodes[1, 0] == 0                  # the fitted mover is still bound to it
+    dropped = motion_layers(fitted, clip, priors=pri)          # a still camera drops the fit's movers
+    assert len(dropped.gaussians) == len(scene.gaussians) - 1
