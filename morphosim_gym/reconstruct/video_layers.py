@@ -56,6 +56,7 @@ class LayerConfig:
             plate, which their feet touch), at the same pixels.
         refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
         search: how far a region's motion is searched for between fitted frames, as a fraction of the width.
+        keep_still: a region moves only when its best match beats staying in place by this factor.
         keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: for a
             moving camera, which has no plate to show behind them; a still camera drops them).
         refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
@@ -68,6 +69,7 @@ class LayerConfig:
     plate_offset: float = 0.05
     layer_offset: float = 0.1
     search: float = 0.125
+    keep_still: float = 1.0
     refine_rounds: int = 3
     keep_movers: bool | None = None
     refine_step: float = 1.0
@@ -105,11 +107,13 @@ def layer_priors(clip: GeneratedClip, scene: Scene4D) -> LayerPriors:
 
 
 def region_flows(frames: np.ndarray, a: int, b: int, labels: np.ndarray, count: int,
-                 search: int | None = None) -> np.ndarray:
+                 search: int | None = None, keep_still: float = 1.0) -> np.ndarray:
     """[count, 2] image motion (pixels, x y) from frame a to frame b of each labelled region 1..count:
     the shift within +- `search` px (default an eighth of the width, at least 6) at which the
     region's own pixels match frame b best (masked template matching; dense optical flow leaves
-    a region's flat interior at zero motion)."""
+    a region's flat interior at zero motion). A region whose best shift matches no better than
+    `keep_still` times its match in place is taken as still (an ambiguous match of a thin or flat
+    region, such as a kerb that compression noise made "move")."""
     import cv2
 
     h, w = labels.shape
@@ -127,7 +131,8 @@ def region_flows(frames: np.ndarray, a: int, b: int, labels: np.ndarray, count: 
         window = fb[y0:y1 + 2 * r, x0:x1 + 2 * r]
         cost = cv2.matchTemplate(window, patch, cv2.TM_SQDIFF, mask=np.repeat(mask[..., None], 3, axis=-1))
         dy, dx = np.unravel_index(int(np.argmin(cost)), cost.shape)
-        out[reg - 1] = (dx - r, dy - r)
+        if cost[dy, dx] < keep_still * cost[r, r]:      # else no motion explains the region about as well
+            out[reg - 1] = (dx - r, dy - r)
     return out
 
 
@@ -159,7 +164,8 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig) -> dict[
         if not keep:
             continue
         reach = max(6, int(round(cfg.search * clip.width)))
-        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1, reach) for d in (-1, 1) if 0 <= k + d < t}
+        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1, reach, cfg.keep_still) for d in (-1, 1)
+                 if 0 <= k + d < t}
         hide = -cams[k].forward * HIDE_DISTANCE
         for r in keep:
             rows, cols = np.nonzero(labels == r)

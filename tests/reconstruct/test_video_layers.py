@@ -116,3 +116,42 @@ def test_kept_fitted_movers_keep_their_motion_on_the_half_step_timeline():
     assert scene.motion.skin_nodes[1, 0] == 0                  # the fitted mover is still bound to it
     dropped = motion_layers(fitted, clip, priors=pri)          # a still camera drops the fit's movers
     assert len(dropped.gaussians) == len(scene.gaussians) - 1
+
+
+def test_a_region_that_no_shift_matches_better_stays_still():
+    clip, pri = _clip()
+    flat = np.full_like(clip.frames[:2], 120)                     # nothing to match: every shift ties
+    assert np.all(region_flows(flat, 0, 1, pri.masks[0], 1) == 0)
+    # a real move wins over staying, unless staying must be beaten by more than it can be
+    assert region_flows(clip.frames, 1, 2, pri.masks[1], 1)[0][0] == pytest.approx(STEP, abs=1.0)
+    assert np.all(region_flows(clip.frames, 1, 2, pri.masks[1], 1, keep_still=0.0) == 0)
+
+
+@pytest.mark.slow
+def test_on_real_footage_layers_beat_holding_the_previous_frame():
+    """vtest.avi (Debian opencv-doc): 15 frames, the layers and plate alone over a stub fit, held-out
+    frames rendered half-way between their fitted neighbours score above showing the previous one."""
+    from morphosim_gym.reconstruct.video_layers import layer_priors
+
+    from ..footage import vtest_avi
+
+    path = vtest_avi()
+    if path is None:
+        pytest.skip("install Debian opencv-doc for vtest.avi")
+    full = GeneratedClip.from_video(path, fov_deg=45, prompt="people walking on a street", max_frames=15, size=96)
+    train = [i for i in range(full.num_frames) if i % 5 != 4]
+    held = [i for i in range(full.num_frames) if i % 5 == 4 and i < train[-1]]
+    clip = GeneratedClip(full.frames[train], tuple(full.cameras[i] for i in train), full.fps, prompt=full.prompt,
+                         info=full.info)
+    stub = _fitted(clip)
+    scene = motion_layers(stub, clip, priors=layer_priors(clip, stub))
+
+    def psnr(a, b):
+        return -10 * np.log10(np.mean((a.astype(np.float64) / 255 - b.astype(np.float64) / 255) ** 2))
+
+    ours, hold = [], []
+    for o in held:
+        k = train.index(o - 1) + 0.5
+        ours.append(psnr((_rgb(scene, clip, k / clip.fps) * 255).round(), full.frames[o]))
+        hold.append(psnr(full.frames[o - 1], full.frames[o]))
+    assert np.mean(ours) > np.mean(hold), (ours, hold)
