@@ -61,7 +61,10 @@ def fit_video(clip: GeneratedClip, config: ReconstructionConfig | None = None,
     scene = reconstruct(clip, config)
     if layers is None or clip.num_frames < 2:
         return scene
-    return motion_layers(scene, clip, config=layers)
+    layered = motion_layers(scene, clip, config=layers)
+    if hasattr(scene, "_fit_log"):
+        layered._fit_log = scene._fit_log          # for reports (not saved)
+    return layered
 
 
 def _summary(clip: GeneratedClip, scene: Scene4D, seconds: float) -> dict[str, Any]:

@@ -324,11 +324,29 @@ def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice]
     return scene
 
 
+def _feature_table(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
+    """[max id + 1, D] mean feature of each object id's Gaussians (None without features)."""
+    feats = _object_features(g, ids)
+    if feats is None:
+        return None
+    table = np.zeros((int(ids.max()) + 1, feats.shape[1]), np.float32)
+    table[ids] = feats
+    return table
+
+
+def _append(parts: list[Gaussians], spans: dict[str, slice], pixels: dict[str, np.ndarray], name: str,
+            part: dict[str, np.ndarray], cfg: LayerConfig, table: np.ndarray | None) -> None:
+    """Add a plate or the layers to `parts`, noting where its Gaussians sit and which pixels they draw."""
+    start = sum(len(p) for p in parts)
+    parts.append(_gaussians(part, cfg, None if table is None else table[part["ids"]]))
+    spans[name], pixels[name] = slice(start, start + len(part["means"])), part["pixel"]
+
+
 def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | None = None,
                   config: LayerConfig | None = None) -> Scene4D:
-    """`scene` (fitted to `clip`) with its movers replaced by flow-moved per-frame layers and, for a
-    still camera, a median background plate (see the module docstring). A scene without movers,
-    or a clip of one frame, gets only the plate (still camera)."""
+    """`scene` (fitted to `clip`) with per-frame layers of its movers, moved between the fitted
+    frames, and for a still camera a median background plate in place of the fit's movers (see the
+    module docstring). A scene without movers, or a clip of one frame, gets only the plate."""
     cfg = config or LayerConfig()
     if scene.motion.num_frames not in (1, clip.num_frames):
         raise ValueError(f"Expected a scene fitted to the clip ({clip.num_frames} frames), found "
@@ -336,11 +354,7 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     pri = priors or layer_priors(clip, scene)
     g = scene.gaussians
     all_ids = np.array(sorted({o.id for o in scene.objects}), np.int64)
-    feats = _object_features(g, all_ids)
-    table = None
-    if feats is not None:
-        table = np.zeros((int(all_ids.max()) + 1, feats.shape[1]), np.float32)
-        table[all_ids] = feats
+    table = _feature_table(g, all_ids)
     keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
     keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
     parts = [g.subset(keep)]
@@ -350,22 +364,14 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     setting = [o.id for o in scene.objects if o.role == "background"]
     if cfg.plate and _still(clip) and setting and clip.num_frames > 1:
         plate = _plate(clip, pri, setting[0], cfg)
-        start = sum(len(p) for p in parts)
-        parts.append(_gaussians(plate, cfg, None if table is None else table[plate["ids"]]))
-        spans["plate"], pixels["plate"], targets["plate"] = slice(start, start + len(plate["means"])), plate["pixel"], \
-            plate["image"]
+        _append(parts, spans, pixels, "plate", plate, cfg, table)
+        targets["plate"] = plate["image"]
         targets["plate_free"] = (~np.isin(pri.masks[0], pri.movers)).astype(np.float64)
     layers = _layers(clip, pri, cfg) if pri.movers and clip.num_frames > 1 else {}
     if layers:
         layers["ids"] = np.where(np.isin(layers["ids"], all_ids), layers["ids"], pri.movers[0])
-        start = sum(len(p) for p in parts)
-        parts.append(_gaussians(layers, cfg, None if table is None else table[layers["ids"]]))
-        spans["layers"], pixels["layers"] = slice(start, start + len(layers["means"])), layers["pixel"]
+        _append(parts, spans, pixels, "layers", layers, cfg, table)
     out = _assemble(scene, clip, parts, keep, layers, pri.movers)
-    return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step) \
-        if cfg.refine_rounds else out
-
-
-def _take(g: Gaussians, keep: np.ndarray) -> Gaussians:
-    sel = {n: np.asarray(getattr(g, n))[keep] for n in ("means", "quats", "scales", "opacities", "colors", "object_ids")}
-    return Gaussians(**sel, features=None if g.features is None else np.asarray(g.features)[keep])
+    if not cfg.refine_rounds:
+        return out
+    return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step)
