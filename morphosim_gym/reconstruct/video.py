@@ -1,7 +1,11 @@
 """A video to a scene file: `reconstruct_video(path, out_dir)` reads the clip (`GeneratedClip.from_video`),
 fits a `Scene4D` with a feature field (`reconstruct`, priors estimated from the frames) and writes
 `out_dir/scene.msim`, `out_dir/preview.png` (input frames over their renders) and
-`out_dir/info.json` (how the video was read, the cameras, the objects, the time taken)."""
+`out_dir/info.json` (how the video was read, the cameras, the objects, the time taken).
+
+`fit_video(clip)` is the fit itself: `reconstruct`, then `video_layers.motion_layers` (the movers
+as per-frame layers moved between the fitted frames; for a still camera over a median background
+plate). On vtest.avi this lifts held-out-frame PSNR above holding the previous frame."""
 
 from __future__ import annotations
 
@@ -15,8 +19,9 @@ import numpy as np
 
 from ..scene import GeneratedClip, Scene4D, save_scene
 from .pipeline import ReconstructionConfig, reconstruct
+from .video_layers import LayerConfig, motion_layers
 
-__all__ = ["VideoResult", "preview_strip", "reconstruct_video"]
+__all__ = ["VideoResult", "fit_video", "preview_strip", "reconstruct_video"]
 
 SCENE_NAME, PREVIEW_NAME, INFO_NAME = "scene.msim", "preview.png", "info.json"
 
@@ -49,6 +54,19 @@ def preview_strip(clip: GeneratedClip, scene: Scene4D, count: int = 3) -> np.nda
     return np.concatenate([top, bottom], axis=0)
 
 
+def fit_video(clip: GeneratedClip, config: ReconstructionConfig | None = None,
+              layers: LayerConfig | None = LayerConfig()) -> Scene4D:
+    """The scene of a video clip: `reconstruct(clip, config)`, then `motion_layers` with `layers`
+    (None: the scaffold fit alone)."""
+    scene = reconstruct(clip, config)
+    if layers is None or clip.num_frames < 2:
+        return scene
+    layered = motion_layers(scene, clip, config=layers)
+    if hasattr(scene, "_fit_log"):
+        layered._fit_log = scene._fit_log          # for reports (not saved)
+    return layered
+
+
 def _summary(clip: GeneratedClip, scene: Scene4D, seconds: float) -> dict[str, Any]:
     return {"video": clip.info.get("video"), "camera": clip.info.get("camera"), "prompt": clip.prompt or None,
             "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
@@ -75,7 +93,7 @@ def reconstruct_video(path: str | Path, out_dir: str | Path, fov_deg: float = 50
         raise ValueError("Expected priors 'auto' or 'estimated' for a video (it carries no ground truth), "
                          "found 'ground_truth'")
     start = time.perf_counter()
-    scene = reconstruct(clip, cfg)
+    scene = fit_video(clip, cfg)
     seconds = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     scene_path, preview_path, info_path = out / SCENE_NAME, out / PREVIEW_NAME, out / INFO_NAME

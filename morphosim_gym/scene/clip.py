@@ -98,7 +98,7 @@ class GeneratedClip:
     @classmethod
     def from_video(cls, path: str | Path, fov_deg: float = 50.0, prompt: str | None = None, max_frames: int = 49,
                    size: int = 160, fps: float | None = None, camera: str = "auto", camera_height: float = 1.6,
-                   pitch_deg: float = 20.0, shot: int | str = "longest") -> "GeneratedClip":
+                   pitch_deg: float = 20.0, shot: int | str = "longest", start: int = 0) -> "GeneratedClip":
         """A clip of a real video: an mp4/avi/mov/mkv/webm/gif file or a folder of frames of one size.
 
         Frames are read within the budget (`scene.video.read_frames`): the longer side shrunk to
@@ -108,7 +108,7 @@ class GeneratedClip:
         the rotation of a panning camera from the frames and keeps one camera when it stays under
         0.5 deg ("still" / "pan" force either); the first frame's camera stands `camera_height` m
         above the ground plane z = 0, pitched down by `pitch_deg`, with a vertical field of view
-        `fov_deg`. The optional `prompt` names what the video shows ("people walking on a
+        `fov_deg`. `start` skips that many source frames of the shot. The optional `prompt` names what the video shows ("people walking on a
         street"): reconstruction labels the moving regions with its first noun and the setting
         with its setting. No depth, masks or tracks: reconstruction estimates them. `ValueError`
         naming the file for a video that cannot be decoded, a single frame, frames of different
@@ -119,7 +119,8 @@ class GeneratedClip:
         """
         from .video_clip import clip_from_video
 
-        return clip_from_video(path, fov_deg, prompt, max_frames, size, fps, camera, camera_height, pitch_deg, shot)
+        return clip_from_video(path, fov_deg, prompt, max_frames, size, fps, camera, camera_height, pitch_deg, shot,
+                               start)
 
     @property
     def num_frames(self) -> int:

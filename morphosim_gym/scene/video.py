@@ -140,7 +140,7 @@ def _check_budget(max_frames: int, size: int) -> None:
 
 
 def read_frames(path: str | Path, max_frames: int = 49, size: int = 160, fps: float | None = None,
-                shot: int | str = "longest", min_fps: float = 5.0) -> VideoFrames:
+                shot: int | str = "longest", min_fps: float = 5.0, start: int = 0) -> VideoFrames:
     """Decode `path` (a video file or a folder of images, sorted by name) within the budget.
 
     Args:
@@ -153,6 +153,7 @@ def read_frames(path: str | Path, max_frames: int = 49, size: int = 160, fps: fl
         min_fps: the kept frames are never sparser than this (motion between frames stays small
             enough to track): a shot longer than `max_frames` at that rate is cut to its first
             `max_frames` frames (info["window"] says which).
+        start: source frames of the kept shot skipped before the window begins (0: from the shot's start).
 
     Returns:
         `VideoFrames` with frames [T, H, W, 3] uint8, T in [MIN_FRAMES, max_frames]; its info says
@@ -162,6 +163,8 @@ def read_frames(path: str | Path, max_frames: int = 49, size: int = 160, fps: fl
     from .shots import choose_shot, split_shots
 
     _check_budget(max_frames, size)
+    if isinstance(start, bool) or not isinstance(start, (int, np.integer)) or start < 0:
+        raise ValueError(f"Expected start as an integer >= 0 (source frames to skip), found {start!r}")
     p = Path(path)
     if not p.exists():
         raise ValueError(f"Expected a video file or a folder of frames, found no such path: {p}")
@@ -196,15 +199,16 @@ def read_frames(path: str | Path, max_frames: int = 49, size: int = 160, fps: fl
         raise ValueError(f"Expected a clip of at least {MIN_FRAMES} frames, found {what} in {p}")
     all_frames = np.stack(decoded)
     shots = split_shots(all_frames)
-    start, stop = choose_shot(shots, shot)
+    shot_start, stop = choose_shot(shots, shot)
+    start = shot_start + int(start)
     if stop - start < MIN_FRAMES:
-        raise ValueError(f"Expected a shot of at least {MIN_FRAMES} frames, found shot {shots.index((start, stop))} "
-                         f"of {p} with {stop - start} (frames {start}-{stop - 1})")
+        raise ValueError(f"Expected a shot of at least {MIN_FRAMES} frames after start, found shot "
+                         f"{shots.index((shot_start, stop))} of {p} with {stop - start} (frames {start}-{stop - 1})")
     stride = max(1, min(math.ceil((stop - start) / max_frames), int(source_fps // min_fps)))
     window = (start, min(stop, start + stride * (max_frames - 1) + 1))
     kept = all_frames[window[0]:window[1]:stride]
     info = {"source": str(p), "source_frames": seen, "source_size": list(source_wh), "source_fps": source_fps,
-            "shots": [list(s) for s in shots], "shot": [start, stop], "window": list(window),
+            "shots": [list(s) for s in shots], "shot": [shot_start, stop], "window": list(window),
             "stride": stride, "size": [wh[0], wh[1]],
             "resized": wh != source_wh, "subsampled": stride > 1, "truncated": seen >= MAX_DECODED}
     return VideoFrames(np.ascontiguousarray(kept), source_fps / stride, info)

@@ -21,11 +21,12 @@ __all__ = ["clip_from_video"]
 
 def clip_from_video(path: str | Path, fov_deg: float = 50.0, prompt: str | None = None, max_frames: int = 49,
                     size: int = 160, fps: float | None = None, camera: str = "auto", camera_height: float = 1.6,
-                    pitch_deg: float = 20.0, shot: int | str = "longest") -> GeneratedClip:
+                    pitch_deg: float = 20.0, shot: int | str = "longest",
+                    start: int = 0) -> GeneratedClip:
     """See `GeneratedClip.from_video`."""
     if prompt is not None and (not isinstance(prompt, str) or not prompt.strip()):
         raise ValueError(f"Expected prompt as a non-empty string or None, found {prompt!r}")
-    video = read_frames(path, max_frames=max_frames, size=size, fps=fps, shot=shot)
+    video = read_frames(path, max_frames=max_frames, size=size, fps=fps, shot=shot, start=start)
     try:
         cameras, cam_info = video_cameras(video.frames, fov_deg, camera, camera_height, pitch_deg)
     except ValueError as exc:

@@ -66,6 +66,22 @@ def test_budget_resizes_and_subsamples_and_says_so(tmp_path):
     assert w.info["stride"] == 2 and w.info["window"] == [0, 7] and len(w.frames) == 4
 
 
+def test_start_skips_source_frames_of_the_shot(tmp_path):
+    frames = _frames(12)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, f in enumerate(frames):
+        iio.imwrite(folder / f"{i:03d}.png", f)
+    v = read_frames(folder, start=5)
+    assert v.info["window"] == [5, 12] and v.info["shot"] == [0, 12]
+    np.testing.assert_array_equal(v.frames, frames[5:])
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ValueError, match="start"):
+            read_frames(folder, start=bad)
+    with pytest.raises(ValueError, match="after start"):
+        read_frames(folder, start=10)                         # 2 frames left
+
+
 def test_an_edited_video_keeps_its_longest_shot(tmp_path):
     a = _frames(5, seed=1)
     b = (_frames(9, seed=2) * 0.3 + np.array([160, 60, 10])).astype(np.uint8)   # another place, other colours

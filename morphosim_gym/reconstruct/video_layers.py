@@ -1,0 +1,377 @@
+"""Moving things of a real video as per-frame layers that move between the fitted frames, and a
+clean background plate for a still camera.
+
+The scaffold fit (`reconstruct`) moves each instance with a handful of rigid nodes; a video's
+estimated masks make every moving region one instance (a crowd of walkers is one "person"), so
+the fit cannot move walkers apart, and the estimated tracks often leave the instance static.
+Between two fitted frames the movers then stay where they were (smeared), and held-out frames in
+between score below simply showing the previous frame. `motion_layers` adds to a fitted scene:
+
+* one layer per fitted frame k and connected moving region: the region's pixels lifted at the
+  depth prior (a little nearer the camera) as pixel-sized Gaussians, bound to a node of their own;
+* the node's poses on a timeline of half steps (motion frame 2k is fitted frame k): identity at
+  2k, half the region's image motion towards frame k +- 1 (masked template matching,
+  `region_flows`) at 2k +- 1, and far behind the camera otherwise (hidden). So a fitted frame
+  shows its own layer, and the time half-way between two fitted frames shows both neighbours'
+  layers moved towards each other;
+* for a still camera, a background plate: the per-pixel median of the frames over the pixels no
+  moving region covers, in front of the fitted background (which keeps what the view never saw,
+  from completion), and the fit's own mover Gaussians dropped; a moving camera has no plate and
+  keeps them behind the layers;
+* colours refined against the frames through the renderer (its blur undone, `refine_rounds`).
+
+The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
+seconds are unchanged; the fitted nodes are resampled); its feature field and objects are the
+fitted scene's (new Gaussians take the mean feature of their object's Gaussians, so edits select
+them). Layers are pixel-thin cut-outs facing the input view: a novel view far from it sees them
+edge-on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..scene import Camera, GeneratedClip, Gaussians, Motion, Scene4D
+from ..scene.camera_motion import slerp_cameras
+
+__all__ = ["LayerConfig", "LayerPriors", "layer_priors", "motion_layers", "region_flows"]
+
+HIDE_DISTANCE = 1e4      # metres behind the camera a layer waits while it is not shown
+
+
+@dataclass(frozen=True)
+class LayerConfig:
+    """Settings of `motion_layers`.
+
+    Attributes:
+        min_area: moving regions smaller than this many pixels are left out (mask noise).
+        opacity: opacity of the layer and plate Gaussians.
+        scale: Gaussian size as a fraction of the pixel footprint.
+        plate: add the median background plate when the camera is still.
+        plate_offset: the plate sits this fraction of its depth in front of the fitted background.
+        layer_offset: the layers sit this fraction of their depth nearer the camera (in front of the
+            plate, which their feet touch), at the same pixels.
+        refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
+        search: how far a region's motion is searched for between fitted frames, as a fraction of the width.
+        keep_still: a region moves only when its best match beats staying in place by this factor.
+        keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: for a
+            moving camera, which has no plate to show behind them; a still camera drops them).
+        refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
+    """
+
+    min_area: int = 4
+    opacity: float = 0.98
+    scale: float = 0.15
+    plate: bool = True
+    plate_offset: float = 0.05
+    layer_offset: float = 0.1
+    search: float = 0.125
+    keep_still: float = 1.0
+    refine_rounds: int = 3
+    keep_movers: bool | None = None
+    refine_step: float = 1.0
+
+
+@dataclass(frozen=True)
+class LayerPriors:
+    """What the layers are built from: per-frame masks of the moving objects and depths.
+
+    Attributes:
+        masks: [T, H, W] int, object id per pixel (< 0 none); the movers are `movers`.
+        depth: [T, H, W] float camera depth of every pixel (0 unknown).
+        movers: ids of the moving objects.
+    """
+
+    masks: np.ndarray
+    depth: np.ndarray
+    movers: tuple[int, ...]
+
+
+def layer_priors(clip: GeneratedClip, scene: Scene4D) -> LayerPriors:
+    """Masks and depths of a video clip from the same estimators the fit used (labels from its prompt)."""
+    from ..priors import RGBPriorEstimators
+    from .video_labels import video_estimators
+
+    est: Any = video_estimators(clip) or RGBPriorEstimators()
+    out = est.masks(clip.frames, None, [], cameras=clip.cameras)
+    if out is None:
+        t, h, w = clip.frames.shape[:3]
+        return LayerPriors(np.full((t, h, w), -1, np.int32), np.zeros((t, h, w), np.float32), ())
+    masks, _ = out
+    depth = est.depth(clip.frames, list(clip.cameras), masks=masks)
+    movers = tuple(o.id for o in scene.objects if o.role != "background")
+    return LayerPriors(np.asarray(masks), np.asarray(depth, np.float32), movers)
+
+
+def region_flows(frames: np.ndarray, a: int, b: int, labels: np.ndarray, count: int,
+                 search: int | None = None, keep_still: float = 1.0) -> np.ndarray:
+    """[count, 2] image motion (pixels, x y) from frame a to frame b of each labelled region 1..count:
+    the shift within +- `search` px (default an eighth of the width, at least 6) at which the
+    region's own pixels match frame b best (masked template matching; dense optical flow leaves
+    a region's flat interior at zero motion). A region whose best shift matches no better than
+    `keep_still` times its match in place is taken as still (an ambiguous match of a thin or flat
+    region, such as a kerb that compression noise made "move")."""
+    import cv2
+
+    h, w = labels.shape
+    r = int(search if search is not None else max(6, w // 8))
+    fa = np.ascontiguousarray(frames[a]).astype(np.float32)
+    fb = cv2.copyMakeBorder(np.ascontiguousarray(frames[b]).astype(np.float32), r, r, r, r, cv2.BORDER_REPLICATE)
+    out = np.zeros((count, 2))
+    for reg in range(1, count + 1):
+        ys, xs = np.nonzero(labels == reg)
+        if len(ys) == 0:
+            continue
+        y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+        patch = fa[y0:y1, x0:x1]
+        mask = (labels[y0:y1, x0:x1] == reg).astype(np.float32)
+        window = fb[y0:y1 + 2 * r, x0:x1 + 2 * r]
+        cost = cv2.matchTemplate(window, patch, cv2.TM_SQDIFF, mask=np.repeat(mask[..., None], 3, axis=-1))
+        dy, dx = np.unravel_index(int(np.argmin(cost)), cost.shape)
+        if cost[dy, dx] < keep_still * cost[r, r]:      # else no motion explains the region about as well
+            out[reg - 1] = (dx - r, dy - r)
+    return out
+
+
+def _lift(camera: Camera, rows: np.ndarray, cols: np.ndarray, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World points of pixels and their footprints (metres per pixel at their depth)."""
+    uv = np.stack([cols + 0.5, rows + 0.5], axis=-1)
+    return camera.unproject(uv, depth), depth / camera.fx
+
+
+def _displacement(cams: tuple[Camera, ...], a: int, b: int, centre: np.ndarray, z: float, flow: np.ndarray) -> np.ndarray:
+    """World displacement of a point seen at pixel `centre` in frame a, at `centre + flow` in frame b (same depth)."""
+    pa = cams[a].unproject(centre, np.float64(z))
+    pb = cams[b].unproject(centre + flow, np.float64(z))
+    return pb - pa
+
+
+def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig) -> dict[str, np.ndarray]:
+    """The movers' Gaussians of every frame and their nodes' translations on the half-step timeline."""
+    import cv2
+
+    t = clip.num_frames
+    cams = clip.cameras
+    moving = np.isin(priors.masks, priors.movers) & (priors.depth > 0)
+    parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
+    trans: list[np.ndarray] = []
+    for k in range(t):
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(moving[k].astype(np.uint8), connectivity=8)
+        keep = [r for r in range(1, count) if stats[r, cv2.CC_STAT_AREA] >= cfg.min_area]
+        if not keep:
+            continue
+        reach = max(6, int(round(cfg.search * clip.width)))
+        flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1, reach, cfg.keep_still) for d in (-1, 1)
+                 if 0 <= k + d < t}
+        hide = -cams[k].forward * HIDE_DISTANCE
+        for r in keep:
+            rows, cols = np.nonzero(labels == r)
+            z = priors.depth[k, rows, cols].astype(np.float64) * (1.0 - cfg.layer_offset)
+            pts, fp = _lift(cams[k], rows, cols, z)
+            node = len(trans)
+            path = np.repeat(hide[None], 2 * t - 1, axis=0)
+            path[2 * k] = 0.0
+            centre = np.array([cols.mean() + 0.5, rows.mean() + 0.5])
+            for d, fl in flows.items():
+                path[2 * k + d] = 0.5 * _displacement(cams, k, k + d, centre, float(np.median(z)), fl[r - 1])
+            trans.append(path)
+            parts["means"].append(pts)
+            parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
+            parts["footprint"].append(fp)
+            parts["ids"].append(priors.masks[k, rows, cols])
+            parts["node"].append(np.full(len(rows), node))
+            parts["pixel"].append(np.stack([np.full(len(rows), k), rows, cols], axis=1))
+    if not trans:
+        return {}
+    out = {k: np.concatenate(v) for k, v in parts.items()}
+    out["trans"] = np.stack(trans, axis=1)                     # [2T - 1, K, 3]
+    return out
+
+
+def _plate(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerConfig) -> dict[str, np.ndarray]:
+    """Median background of a still camera over the pixels no mover covers, a little in front of the fit."""
+    moving = np.isin(priors.masks, priors.movers)
+    frames = np.where(moving[..., None], np.nan, clip.frames.astype(np.float64))
+    with np.errstate(all="ignore"):
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            plate = np.nanmedian(frames, axis=0)
+    plate = np.where(np.isnan(plate), np.median(clip.frames, axis=0), plate)
+    depth = np.max(np.where(moving, 0.0, priors.depth), axis=0)
+    rows, cols = np.nonzero(depth > 0)
+    z = depth[rows, cols].astype(np.float64) * (1.0 - cfg.plate_offset)
+    pts, fp = _lift(clip.cameras[0], rows, cols, z)
+    return {"means": pts, "colors": plate[rows, cols] / 255.0, "footprint": fp, "ids": np.full(len(rows), setting),
+            "pixel": np.stack([np.zeros(len(rows), int), rows, cols], axis=1), "image": plate / 255.0}
+
+
+def _gaussians(part: dict[str, np.ndarray], cfg: LayerConfig, features: np.ndarray | None) -> Gaussians:
+    n = len(part["means"])
+    s = np.repeat(part["footprint"][:, None] * cfg.scale, 3, axis=1)
+    return Gaussians(means=part["means"].astype(np.float32), quats=np.tile([1.0, 0, 0, 0], (n, 1)).astype(np.float32),
+                     scales=s.astype(np.float32), opacities=np.full(n, cfg.opacity, np.float32),
+                     colors=np.clip(part["colors"], 0, 1).astype(np.float32), features=features,
+                     object_ids=part["ids"].astype(np.int32))
+
+
+def _object_features(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
+    """[len(ids), D] mean feature of each id's Gaussians in `g` (None without features)."""
+    if g.features is None:
+        return None
+    f = np.asarray(g.features)
+    mean = f.mean(axis=0)
+    out = []
+    for i in ids:
+        sel = np.asarray(g.object_ids) == i
+        out.append(f[sel].mean(axis=0) if sel.any() else mean)
+    return np.asarray(out, np.float32).reshape(len(ids), f.shape[1])
+
+
+def _concat(parts: list[Gaussians]) -> Gaussians:
+    names = ("means", "quats", "scales", "opacities", "colors", "object_ids")
+    cat = {n: np.concatenate([np.asarray(getattr(p, n)) for p in parts]) for n in names}
+    feats = None
+    if all(p.features is not None for p in parts):
+        feats = np.concatenate([np.asarray(p.features) for p in parts]).astype(np.float32)
+    return Gaussians(**cat, features=feats)
+
+
+def _still(clip: GeneratedClip) -> bool:
+    return len({c.world_to_camera.tobytes() for c in clip.cameras}) == 1
+
+
+def _half_step_cameras(cams: tuple[Camera, ...]) -> tuple[Camera, ...]:
+    if len({c.world_to_camera.tobytes() for c in cams}) == 1:
+        return (cams[0],)
+    times = list(range(len(cams)))
+    return tuple(slerp_cameras(cams, times, 0.5 * j) for j in range(2 * len(cams) - 1))
+
+
+def _half_step_motion(motion: Motion, keep: np.ndarray, frames: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                              np.ndarray, np.ndarray]:
+    """The fitted motion of the kept Gaussians resampled at `frames` half steps: node rotations
+    [F, K, 4], translations [F, K, 3], node objects [K], skin nodes and weights of the kept rows."""
+    poses = [motion.node_poses(0.5 * j) for j in range(frames)]
+    rot = np.stack([p[0] for p in poses]).reshape(frames, motion.num_nodes, 4)
+    tr = np.stack([p[1] for p in poses]).reshape(frames, motion.num_nodes, 3)
+    return rot, tr, motion.node_objects, motion.skin_nodes[keep], motion.skin_weights[keep]
+
+
+def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep: np.ndarray,
+              layers: dict[str, np.ndarray], movers: tuple[int, ...]) -> Scene4D:
+    """The output scene: `parts` concatenated (the fitted Gaussians kept first, the layers' last),
+    the kept ones moving as fitted and the layers on their own nodes, on the half-step timeline."""
+    gaussians = _concat(parts)
+    n = len(gaussians)
+    frames = 2 * clip.num_frames - 1 if layers else 1
+    rot, tr, node_objects, kept_nodes, kept_weights = _half_step_motion(scene.motion, keep, frames)
+    slots = max(1, kept_nodes.shape[1])
+    skin_nodes = np.full((n, slots), -1, np.int32)
+    skin_weights = np.zeros((n, slots), np.float32)
+    skin_nodes[:len(kept_nodes), :kept_nodes.shape[1]] = kept_nodes
+    skin_weights[:len(kept_nodes), :kept_nodes.shape[1]] = kept_weights
+    objects = scene.objects
+    if layers:
+        m, k0 = len(layers["means"]), rot.shape[1]
+        skin_nodes[n - m:, 0] = layers["node"] + k0
+        skin_weights[n - m:, 0] = 1.0
+        count = layers["trans"].shape[1]
+        identity = np.zeros((frames, count, 4))
+        identity[..., 0] = 1.0
+        rot, tr = np.concatenate([rot, identity], axis=1), np.concatenate([tr, layers["trans"]], axis=1)
+        first = np.unique(layers["node"], return_index=True)[1]
+        node_objects = np.concatenate([node_objects, layers["ids"][first]]).astype(np.int32)
+        objects = tuple(replace(o, dynamic=o.dynamic or o.id in movers) for o in scene.objects)
+    motion = Motion(rot, tr, skin_nodes, skin_weights, node_objects)
+    cameras = _half_step_cameras(clip.cameras) if layers else scene.cameras
+    return Scene4D(gaussians, motion, objects, clip.fps * (2.0 if layers else 1.0), cameras,
+                   decoders=scene.decoders, provenance=scene.provenance, background=scene.background, sky=scene.sky,
+                   sensor=scene.sensor)
+
+
+def _render(scene: Scene4D, camera: Camera, t: float) -> np.ndarray:
+    from ..render import render
+
+    return np.clip(np.asarray(render(scene, camera, t=t).rgb, np.float64), 0.0, 1.0)
+
+
+def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice], pixels: dict[str, np.ndarray],
+                    targets: dict[str, np.ndarray], rounds: int, step_size: float = 1.0) -> Scene4D:
+    """Undo the renderer's blur on the plate and layer colours: each round adds every Gaussian's
+    pixel residual (its frame minus the render there) to its colour (Van Cittert iteration)."""
+    for _ in range(rounds):
+        colors = np.array(scene.gaussians.colors, np.float64)
+        for name, sl in spans.items():
+            px = pixels[name]
+            for k in np.unique(px[:, 0]):
+                sel = np.flatnonzero(px[:, 0] == k)
+                cam = clip.cameras[int(k)]
+                img = _render(scene, cam, float(k) / clip.fps)
+                target = targets[name] if name == "plate" else clip.frames[int(k)] / 255.0
+                rows, cols = px[sel, 1], px[sel, 2]
+                step = target[rows, cols] - img[rows, cols]
+                if name == "plate" and "plate_free" in targets:     # under frame 0's movers: left as is
+                    step *= targets["plate_free"][rows, cols, None]
+                colors[sl.start + sel] += step_size * step
+        g = scene.gaussians.replace(colors=np.clip(colors, 0.0, 1.0).astype(np.float32))
+        scene = Scene4D(g, scene.motion, scene.objects, scene.fps, scene.cameras, decoders=scene.decoders,
+                        provenance=scene.provenance, background=scene.background, sky=scene.sky, sensor=scene.sensor)
+    return scene
+
+
+def _feature_table(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
+    """[max id + 1, D] mean feature of each object id's Gaussians (None without features)."""
+    feats = _object_features(g, ids)
+    if feats is None:
+        return None
+    table = np.zeros((int(ids.max()) + 1, feats.shape[1]), np.float32)
+    table[ids] = feats
+    return table
+
+
+def _append(parts: list[Gaussians], spans: dict[str, slice], pixels: dict[str, np.ndarray], name: str,
+            part: dict[str, np.ndarray], cfg: LayerConfig, table: np.ndarray | None) -> None:
+    """Add a plate or the layers to `parts`, noting where its Gaussians sit and which pixels they draw."""
+    start = sum(len(p) for p in parts)
+    parts.append(_gaussians(part, cfg, None if table is None else table[part["ids"]]))
+    spans[name], pixels[name] = slice(start, start + len(part["means"])), part["pixel"]
+
+
+def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | None = None,
+                  config: LayerConfig | None = None) -> Scene4D:
+    """`scene` (fitted to `clip`) with per-frame layers of its movers, moved between the fitted
+    frames, and for a still camera a median background plate in place of the fit's movers (see the
+    module docstring). A scene without movers, or a clip of one frame, gets only the plate."""
+    cfg = config or LayerConfig()
+    if scene.motion.num_frames not in (1, clip.num_frames):
+        raise ValueError(f"Expected a scene fitted to the clip ({clip.num_frames} frames), found "
+                         f"{scene.motion.num_frames} motion frames")
+    pri = priors or layer_priors(clip, scene)
+    g = scene.gaussians
+    all_ids = np.array(sorted({o.id for o in scene.objects}), np.int64)
+    table = _feature_table(g, all_ids)
+    keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
+    keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
+    parts = [g.subset(keep)]
+    spans: dict[str, slice] = {}
+    pixels: dict[str, np.ndarray] = {}
+    targets: dict[str, np.ndarray] = {}
+    setting = [o.id for o in scene.objects if o.role == "background"]
+    if cfg.plate and _still(clip) and setting and clip.num_frames > 1:
+        plate = _plate(clip, pri, setting[0], cfg)
+        _append(parts, spans, pixels, "plate", plate, cfg, table)
+        targets["plate"] = plate["image"]
+        targets["plate_free"] = (~np.isin(pri.masks[0], pri.movers)).astype(np.float64)
+    layers = _layers(clip, pri, cfg) if pri.movers and clip.num_frames > 1 else {}
+    if layers:
+        layers["ids"] = np.where(np.isin(layers["ids"], all_ids), layers["ids"], pri.movers[0])
+        _append(parts, spans, pixels, "layers", layers, cfg, table)
+    out = _assemble(scene, clip, parts, keep, layers, pri.movers)
+    if not cfg.refine_rounds:
+        return out
+    return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step)
