@@ -20,13 +20,16 @@ assets and an HDR sky where the asset packages are installed). Modes:
   vector-8         the native MorphoSimVectorEnv of 8 envs: one process, one batched render of
                    all 8 cameras per step on all cores
   vector-8-1thread the same with its batched render on one numba thread
+  vector-8-serial  the same without the render pipeline (`pipeline=1`: no worker thread
+                   rendering one half of the envs while the other half is prepared or finished)
   vector-32        the same with 32 envs
 
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
-observation) by calling them directly. `--ratios` measures single, vector-8 and sync-8
-alternately in one run (A B C A B C ...) and reports per-round ratios (median) and the
-vector-8 cost split (batched render, skinning, the rest: Python) for each id and scene kind;
-on a shared machine only these same-run ratios mean much.
+observation) by calling them directly. `--ratios` measures single, vector-8, sync-8,
+vector-8-1thread, vector-8-serial and vector-32 alternately in one run (A B C A B C ...) and
+reports per-round ratios (median) and the vector-8 cost split (batched render, skinning, the
+rest: Python; measured serially) for each id and scene kind; on a shared machine only these
+same-run ratios mean much.
 """
 
 from __future__ import annotations
@@ -49,7 +52,8 @@ from _envs_common import (SCENES, machine, render_and_skinning_timer, scene_kwar
 from morphosim_gym.envs import ENV_IDS, make_vec  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8", "vector-8", "vector-8-1thread", "vector-32")
+MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8", "vector-8", "vector-8-1thread",
+         "vector-8-serial", "vector-32")
 
 
 def _single(env_id: str, steps: int, **kw) -> float:
@@ -75,6 +79,7 @@ _MODE_TABLE = {
     "async-8": ("async", 8, {"scene_pool": 8}),
     "vector-8": ("vector", 8, {"scene_pool": 8}),
     "vector-8-1thread": ("vector", 8, {"scene_pool": 8, "render_threads": 1}),
+    "vector-8-serial": ("vector", 8, {"scene_pool": 8, "pipeline": 1}),
     "vector-32": ("vector", 32, {"scene_pool": 8}),
 }
 
@@ -91,10 +96,11 @@ def measure(env_id: str, mode: str, steps: int, scenes: str = "procedural") -> f
 
 
 def vector_split(env_id: str, steps: int, n: int = 8, render_threads=None, scenes: str = "procedural") -> dict:
-    """Per env-step microseconds of a native vector env of n envs: batched render, skinning, rest."""
+    """Per env-step microseconds of a native vector env of n envs: batched render, skinning, rest
+    (measured without the pipeline, so the parts add up to the total)."""
     timer = render_and_skinning_timer()
     venv = make_vec(env_id, n, vectorization_mode="vector", scene_pool=8, render_threads=render_threads,
-                    **scene_kwargs(scenes))
+                    pipeline=1, **scene_kwargs(scenes))      # serial: the render does not overlap the rest
     try:
         total = vector_rollout(venv, steps, on_start=timer.install)
     finally:
@@ -108,7 +114,7 @@ def vector_split(env_id: str, steps: int, n: int = 8, render_threads=None, scene
 
 
 def ratios(env_id: str, steps: int, rounds: int, scenes: str = "procedural") -> dict:
-    """single, vector-8, sync-8, vector-8-1thread and vector-32 measured alternately (A B C ... A B C
+    """The `RATIO_MODES` measured alternately (A B C ... A B C
     ...); per-round ratios and their medians, and the vector-8 cost splits."""
     runs: dict[str, list[float]] = {m: [] for m in RATIO_MODES}
     for _ in range(rounds):
@@ -133,10 +139,11 @@ def ratios(env_id: str, steps: int, rounds: int, scenes: str = "procedural") -> 
     return out
 
 
-RATIO_MODES = ("single", "vector-8", "sync-8", "vector-8-1thread", "vector-32")
+RATIO_MODES = ("single", "vector-8", "sync-8", "vector-8-1thread", "vector-8-serial", "vector-32")
 _RATIOS = {"vector8_over_single": ("vector-8", "single"), "vector8_over_sync8": ("vector-8", "sync-8"),
            "vector8_1thread_over_single": ("vector-8-1thread", "single"),
            "vector8_1thread_over_sync8": ("vector-8-1thread", "sync-8"),
+           "vector8_over_vector8_serial": ("vector-8", "vector-8-serial"),
            "vector32_over_single": ("vector-32", "single")}
 
 
@@ -188,7 +195,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--breakdown", action="store_true")
     ap.add_argument("--ratios", action="store_true",
-                    help="only the same-run ratios (single / vector-8 / sync-8 / vector-8-1thread / vector-32)")
+                    help="only the same-run ratios of RATIO_MODES (single, vector-8, sync-8, ...)")
     ap.add_argument("--json", type=Path, default=RESULTS / "envs.json")
     args = ap.parse_args()
 
@@ -228,7 +235,8 @@ def _main_ratios(args) -> None:
             r = ratios(env_id, args.steps, args.repeats, scenes)
             out.append(r)
             print(f"{env_id:22s} {scenes:10s} vector-8/single {r['vector8_over_single']:.2f}  vector-8/sync-8 "
-                  f"{r['vector8_over_sync8']:.2f}  vector-32/single {r['vector32_over_single']:.2f}  "
+                  f"{r['vector8_over_sync8']:.2f}  vector-8/vector-8-serial {r['vector8_over_vector8_serial']:.2f}  "
+                  f"vector-32/single {r['vector32_over_single']:.2f}  "
                   f"(1 thread: {r['vector8_1thread_over_single']:.2f}, {r['vector8_1thread_over_sync8']:.2f})  "
                   f"runs {r['runs']}  split {r['vector8_split_us_per_env_step']}"
                   f"  split 1 thread {r['vector8_1thread_split_us_per_env_step']}", flush=True)

@@ -168,3 +168,22 @@ def test_registered_task_ids_get_the_native_vector_env():
     ref, ref_info = single.reset(seed=1)
     assert np.array_equal(obs["rgb"][1], ref["rgb"]) and info["target"][1] == ref_info["target"]
     venv.close()
+
+
+@pytest.mark.parametrize("pipeline", [1, 3])
+def test_pipelined_chunks_match_single_envs(pipeline):
+    # pipeline=3 over 2 envs: one env per chunk (a worker thread renders one while the other is
+    # prepared or finished); pipeline=1: no worker thread
+    kw = dict(FAST, scene_pool=2)
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=pipeline, **kw)
+    singles = [make("MorphoSim/Track-v0", **kw) for _ in range(N)]
+    assert _rollout_compare(venv, singles, seed=11) >= N
+    assert (venv._worker is not None) == (pipeline > 1)
+    venv.close()
+    assert venv._worker is None
+
+
+def test_pipeline_argument_is_checked():
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError, match="pipeline"):
+            MorphoSimVectorEnv(1, pipeline=bad)
