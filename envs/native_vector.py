@@ -170,9 +170,7 @@ class MorphoSimVectorEnv(VectorEnv):
         extra: dict = {}
         checked: dict = {}
         for chunk in self._chunks(stepping):
-            for i in chunk:
-                checked[i], extra[i] = self._advance(i, acts[i])
-            requests = self._requests(chunk)
+            requests = self._prepare(chunk, acts, checked, extra)
             pending.append((chunk, requests, self._launch(requests)))
             if len(pending) > 1:
                 infos = self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, infos)
@@ -204,8 +202,7 @@ class MorphoSimVectorEnv(VectorEnv):
         else:
             extra = {}
         a = check_action(action, env.action_space.shape)
-        with numba_threads(env.config.render_threads):
-            env._advance(a)
+        env._advance(a)
         return a, extra
 
     def _chunks(self, indices: list) -> list:
@@ -220,13 +217,17 @@ class MorphoSimVectorEnv(VectorEnv):
         # auto: overlap on the CPU backend where numba's layer lets two Python threads launch kernels
         return 2 if self.backend == "cpu" and threading_layer() in THREAD_SAFE_LAYERS else 1
 
-    def _requests(self, indices: Sequence[int]) -> list:
-        """Each env's `_render_request` (its Gaussians at its time, its cameras, background, sky)."""
+    def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
+        """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
+        and `extra`) and build its `_render_request`; one `numba_threads` per run of envs with the
+        same `render_threads` (it is not free: a lock and two thread-count changes)."""
         requests = []
-        for i in indices:
-            env = self.envs[i]
-            with numba_threads(env.config.render_threads):
-                requests.append(env._render_request(env.world.t))
+        for threads, run in _runs(chunk, [self.envs[i].config.render_threads for i in chunk]):
+            with numba_threads(threads):
+                for i in run:
+                    checked[i], extra[i] = self._advance(i, acts[i])
+                    env = self.envs[i]
+                    requests.append(env._render_request(env.world.t))
         return requests
 
     def _launch(self, requests: list) -> Any:
@@ -320,6 +321,17 @@ def __getattr__(name: str) -> Any:
     if name.startswith("vector_") and name[len("vector_"):] in ENTRY_POINTS:
         return vector_entry_point(name[len("vector_"):])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _runs(items: list, keys: list) -> list:
+    """`items` cut into runs of consecutive items with equal keys: [(key, [items...]), ...]."""
+    runs: list = []
+    for item, key in zip(items, keys):
+        if runs and runs[-1][0] == key:
+            runs[-1][1].append(item)
+        else:
+            runs.append((key, [item]))
+    return runs
 
 
 def _per_env(values: Optional[Sequence[Any]], n: int, name: str) -> list:
