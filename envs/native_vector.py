@@ -291,6 +291,11 @@ class MorphoSimVectorEnv(VectorEnv):
             return None
         return tuple(env.render() for env in self.envs)
 
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_worker"] = None               # a thread pool does not copy; the copy starts its own
+        return state
+
     def close_extras(self, **kwargs: Any) -> None:
         if self._worker is not None:
             self._worker.shutdown(wait=True)

@@ -187,3 +187,19 @@ def test_pipeline_argument_is_checked():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ValueError, match="pipeline"):
             MorphoSimVectorEnv(1, pipeline=bad)
+
+
+def test_a_pipelined_vector_env_deep_copies_and_both_copies_step_alike():
+    import copy
+
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=2, **FAST)
+    venv.reset(seed=3)
+    a = np.full((N, 3), 0.2, np.float32)
+    venv.step(a)
+    twin = copy.deepcopy(venv)
+    assert twin._worker is None
+    obs, rew, _, _, _ = venv.step(a)
+    obs2, rew2, _, _, _ = twin.step(a)
+    assert np.array_equal(obs["rgb"], obs2["rgb"]) and np.array_equal(rew, rew2)
+    venv.close()
+    twin.close()
