@@ -1,7 +1,7 @@
 """Wall time of a short Stable-Baselines3 PPO run on Track-v0 with each way of vectorising the envs:
 SB3's `DummyVecEnv` (8 single envs in one process, the example's choice), SB3's `SubprocVecEnv`
 (one process per env) and our native batch (`SB3VecEnv` over `MorphoSimVectorEnv`: one batched
-render per step).
+render per step; "native-serial" without its render pipeline, `pipeline=1`).
 
     python benchmarks/ppo_walltime.py                          # 8k steps, every mode, 1 round
     python benchmarks/ppo_walltime.py --timesteps 4096 --rounds 2 --modes dummy native
@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODES = ("dummy", "subproc", "native")
+MODES = ("dummy", "subproc", "native", "native-serial")
 ENV_ID = "MorphoSim/Track-v0"
 
 
@@ -48,12 +48,13 @@ def build(mode: str, n: int, size: int, pool: int):
         return DummyVecEnv([_single_thunk(size, pool) for _ in range(n)])
     if mode == "subproc":
         return SubprocVecEnv([_single_thunk(size, pool) for _ in range(n)], start_method="spawn")
-    if mode == "native":
+    if mode in ("native", "native-serial"):
         from morphosim_gym.envs import make_vec
         from morphosim_gym.envs.sb3_vec import SB3VecEnv
 
+        extra = {"pipeline": 1} if mode == "native-serial" else {}
         return SB3VecEnv(make_vec(ENV_ID, n, vectorization_mode="vector", width=size, height=size, scene_pool=pool,
-                                  pool_seed=0), obs_key="rgb")
+                                  pool_seed=0, **extra), obs_key="rgb")
     raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
 
 
