@@ -15,53 +15,33 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import statistics
 import sys
-import time
 from pathlib import Path
 
-import numpy as np
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from morphosim_gym.envs import make_vec
-from morphosim_gym.errors import BackendUnavailableError
-from morphosim_gym.render import backend_available
+from _envs_common import SCENES, CallTimer, machine, scene_kwargs, vector_rollout  # noqa: E402
+from morphosim_gym.envs import make_vec  # noqa: E402
+from morphosim_gym.errors import BackendUnavailableError  # noqa: E402
+from morphosim_gym.render import backend_available  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
-def run(env_id: str, n: int, steps: int, backend: str, size: int) -> dict:
+def run(env_id: str, n: int, steps: int, backend: str, size: int, scenes: str = "procedural") -> dict:
     """Steps per second (all envs) and the batched render's share of one sweep of `steps` steps."""
     from morphosim_gym.envs import native_vector
 
     venv = make_vec(env_id, n, vectorization_mode="vector", backend=backend, width=size, height=size,
-                    scene_pool=8)
-    venv.reset(seed=0)
-    rng = np.random.default_rng(0)
-    shape = venv.action_space.shape
-    for _ in range(3):
-        venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
-    spent = [0.0]
-    orig = native_vector.render_batch
-
-    def timed(*a, **k):
-        t0 = time.perf_counter()
-        try:
-            return orig(*a, **k)
-        finally:
-            spent[0] += time.perf_counter() - t0
-
-    native_vector.render_batch = timed
+                    scene_pool=8, **scene_kwargs(scenes))
+    timer = CallTimer({"render": [(native_vector, "render_batch")]})
     try:
-        t0 = time.perf_counter()
-        for _ in range(steps):
-            venv.step(rng.uniform(-1, 1, shape).astype(np.float32))
-        total = time.perf_counter() - t0
+        total = vector_rollout(venv, steps, warmup=3, on_start=timer.install)
     finally:
-        native_vector.render_batch = orig
+        timer.uninstall()
     venv.close()
-    return {"steps_per_s": steps * n / total, "render_share": spent[0] / total}
+    return {"steps_per_s": steps * n / total, "render_share": timer.seconds["render"] / total}
 
 
 def main() -> None:
@@ -72,6 +52,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--size", type=int, default=128, help="image width and height")
     ap.add_argument("--backend", default="gsplat", choices=["gsplat", "cpu"])
+    ap.add_argument("--scenes", default="real", choices=SCENES, help="real: the default assets=\"auto\"; procedural: assets=\"off\"")
     ap.add_argument("--json", type=Path, default=RESULTS / "gpu_envs.json")
     args = ap.parse_args()
     if args.backend == "gsplat" and not backend_available("gsplat"):
@@ -84,7 +65,7 @@ def main() -> None:
     rows = []
     for env_id in args.ids:
         for n in args.envs:
-            runs = [run(env_id, n, args.steps, args.backend, args.size) for _ in range(args.repeats)]
+            runs = [run(env_id, n, args.steps, args.backend, args.size, args.scenes) for _ in range(args.repeats)]
             rates = [r["steps_per_s"] for r in runs]
             row = {"id": env_id, "envs": n, "steps_per_s": round(statistics.median(rates), 1),
                    "runs": [round(x, 1) for x in rates],
@@ -97,7 +78,7 @@ def main() -> None:
         print(f"| {r['id']} | {r['envs']} | {r['steps_per_s']:.0f} | {r['render_share']:.0%} |")
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"rows": rows, "settings": vars(args) | {"json": str(args.json)},
-                                     "machine": {"cpus": os.cpu_count(), "python": platform.python_version()}},
+                                     "machine": machine()},
                                     indent=2, default=str) + "\n")
     print(f"\nwrote {args.json}")
 

@@ -10,6 +10,8 @@ each env's own `reset`.
 
 from __future__ import annotations
 
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from types import SimpleNamespace
 from typing import Any, Callable, Mapping, Optional, Sequence
 
@@ -19,6 +21,7 @@ from gymnasium.envs.registration import load_env_creator
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
+from morphosim_gym.parallel import THREAD_SAFE_LAYERS, threading_layer
 from morphosim_gym.render.api import render_batch
 
 from . import ENTRY_POINTS
@@ -27,6 +30,8 @@ from .threads import numba_threads
 from .wrappers import LanguagePerturbation
 
 __all__ = ["MorphoSimVectorEnv", "vector_entry_point"]
+
+_RENDER_TIMEOUT_S = 600.0          # a batched render that takes longer is a hang: raise instead of waiting
 
 
 class _Deferred(gym.Env):
@@ -68,6 +73,12 @@ class MorphoSimVectorEnv(VectorEnv):
             `LanguagePerturbation`, exactly as `LanguagePerturbation(gym.make(id), **p)` would be,
             and its info carries "perturbations".
         env_kwargs: one dict of extra env arguments per env (over `kwargs`), or None.
+        pipeline: how many chunks a step's envs are rendered in. With more than one, a worker
+            thread renders chunk c while this thread finishes chunk c - 1 (reward, observation,
+            info) and prepares chunk c + 1 (rig, skinning, cameras), so the Python work and the
+            render run on different cores. None: 2 on the "cpu" backend when numba's threading
+            layer is thread-safe (tbb, omp), else 1 (no worker). Results are the same either way
+            (every view's image is independent of the batch it is rendered in).
         kwargs: env arguments (the fields of `EnvConfig`) for every env.
 
     Gymnasium's `autoreset_mode` is NEXT_STEP (as `SyncVectorEnv`'s default): the step after an
@@ -86,17 +97,23 @@ class MorphoSimVectorEnv(VectorEnv):
 
     def __init__(self, num_envs: int, kind: str = "track", render_threads: Optional[int] = None,
                  backend: Optional[str] = None, perturbations: Optional[Sequence[Optional[Mapping[str, Any]]]] = None,
-                 env_kwargs: Optional[Sequence[Optional[Mapping[str, Any]]]] = None, **kwargs: Any) -> None:
+                 env_kwargs: Optional[Sequence[Optional[Mapping[str, Any]]]] = None, pipeline: Optional[int] = None,
+                 **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
         if kind not in ENTRY_POINTS:
             raise ValueError(f"Expected kind in {sorted(ENTRY_POINTS)}, found {kind!r}")
+        if pipeline is not None and (isinstance(pipeline, bool) or not isinstance(pipeline, (int, np.integer))
+                                     or pipeline < 1):
+            raise ValueError(f"Expected pipeline as a positive integer or None, found {pipeline!r}")
         n = int(num_envs)
         per_env = _per_env(env_kwargs, n, "env_kwargs")
         perturbations = _per_env(perturbations, n, "perturbations")
         creator: Callable[..., gym.Env] = load_env_creator(ENTRY_POINTS[kind])
         self.num_envs = n
         self.render_threads = render_threads
+        self.pipeline = None if pipeline is None else int(pipeline)
+        self._worker: Optional[ThreadPoolExecutor] = None
         self.envs = [creator(**{**kwargs, **(per_env[i] or {})}) for i in range(n)]
         self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
@@ -139,22 +156,38 @@ class MorphoSimVectorEnv(VectorEnv):
         terms = np.zeros(n, dtype=bool)
         truncs = np.zeros(n, dtype=bool)
         infos: dict = {}
-        stepping, extra = [], {}
+        stepping = []
         for i in range(n):
             if self._autoreset[i]:
                 target = self._steppers[i] or self.envs[i]
                 self._obs[i], info = target.reset()
                 infos = self._add_info(infos, info, i)
-                continue
-            a, extra[i] = self._advance(i, acts[i])
-            stepping.append((i, a))
-        for (i, a), rendered in zip(stepping, self._render([i for i, _ in stepping])):
-            env = self.envs[i]
-            self._obs[i], rewards[i], terms[i], truncs[i], info = env._step_outcome(a, rendered)
-            info.update(extra[i])
-            infos = self._add_info(infos, info, i)
+            else:
+                stepping.append(i)
+        # chunk by chunk: advance and build the render requests, hand the chunk's render to the
+        # worker, finish the previous chunk (reward, observation, info) while this one renders
+        pending: deque = deque()
+        extra: dict = {}
+        checked: dict = {}
+        for chunk in self._chunks(stepping):
+            requests = self._prepare(chunk, acts, checked, extra)
+            pending.append((chunk, requests, self._launch(requests)))
+            if len(pending) > 1:
+                infos = self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, infos)
+        while pending:
+            infos = self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, infos)
         self._autoreset = terms | truncs
         return self._batched_obs(), rewards, terms, truncs, infos
+
+    def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
+                terms: np.ndarray, truncs: np.ndarray, infos: dict) -> dict:
+        """The rest of the step of a chunk's envs once its render is done; the updated infos."""
+        outs = launched.result(timeout=_RENDER_TIMEOUT_S) if isinstance(launched, Future) else launched
+        for i, rendered in zip(chunk, self._rendered(chunk, requests, outs)):
+            self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
+            info.update(extra[i])
+            infos = self._add_info(infos, info, i)
+        return infos
 
     def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
         """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
@@ -169,20 +202,50 @@ class MorphoSimVectorEnv(VectorEnv):
         else:
             extra = {}
         a = check_action(action, env.action_space.shape)
-        with numba_threads(env.config.render_threads):
-            env._advance(a)
+        env._advance(a)
         return a, extra
 
-    def _render(self, indices: Sequence[int]) -> list:
-        """`_render`'s result for each of these envs, from one batched render of all their cameras."""
+    def _chunks(self, indices: list) -> list:
+        """The stepping envs in `pipeline` contiguous chunks (one chunk: no worker thread)."""
+        k = max(1, min(self._pipeline_chunks(), len(indices)))
+        bounds = np.linspace(0, len(indices), k + 1).round().astype(int)
+        return [indices[bounds[j]:bounds[j + 1]] for j in range(k) if bounds[j + 1] > bounds[j]]
+
+    def _pipeline_chunks(self) -> int:
+        if self.pipeline is not None:
+            return self.pipeline
+        # auto: overlap on the CPU backend where numba's layer lets two Python threads launch kernels
+        return 2 if self.backend == "cpu" and threading_layer() in THREAD_SAFE_LAYERS else 1
+
+    def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
+        """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
+        and `extra`) and build its `_render_request`; one `numba_threads` per run of envs with the
+        same `render_threads` (it is not free: a lock and two thread-count changes)."""
         requests = []
-        for i in indices:
-            env = self.envs[i]
-            with numba_threads(env.config.render_threads):
-                requests.append(env._render_request(env.world.t))
+        for threads, run in _runs(chunk, [self.envs[i].config.render_threads for i in chunk]):
+            with numba_threads(threads):
+                for i in run:
+                    checked[i], extra[i] = self._advance(i, acts[i])
+                    env = self.envs[i]
+                    requests.append(env._render_request(env.world.t))
+        return requests
+
+    def _launch(self, requests: list) -> Any:
+        """The batched render of these requests: a `Future` from the worker thread when pipelined
+        (more than one chunk), else the outputs themselves."""
         views = [(sources, cam, bg, sky) for sources, cams, bg, sky in requests for cam in cams]
+        if self._pipeline_chunks() == 1:
+            return self._render_views(views)
+        if self._worker is None:
+            self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="morphosim-vector-render")
+        return self._worker.submit(self._render_views, views)
+
+    def _render_views(self, views: list) -> list:
         with numba_threads(self.render_threads):
-            outs = render_batch(views, backend=self.backend)
+            return render_batch(views, backend=self.backend)
+
+    def _rendered(self, indices: Sequence[int], requests: list, outs: list) -> list:
+        """`_render`'s result for each of these envs, from the batched render of their requests."""
         rendered, k = [], 0
         for i, (_, cams, _, _) in zip(indices, requests):
             mine = outs[k:k + len(cams)]
@@ -228,7 +291,15 @@ class MorphoSimVectorEnv(VectorEnv):
             return None
         return tuple(env.render() for env in self.envs)
 
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_worker"] = None               # a thread pool does not copy; the copy starts its own
+        return state
+
     def close_extras(self, **kwargs: Any) -> None:
+        if self._worker is not None:
+            self._worker.shutdown(wait=True)
+            self._worker = None
         for env in self.envs:
             env.close()
 
@@ -255,6 +326,17 @@ def __getattr__(name: str) -> Any:
     if name.startswith("vector_") and name[len("vector_"):] in ENTRY_POINTS:
         return vector_entry_point(name[len("vector_"):])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _runs(items: list, keys: list) -> list:
+    """`items` cut into runs of consecutive items with equal keys: [(key, [items...]), ...]."""
+    runs: list = []
+    for item, key in zip(items, keys):
+        if runs and runs[-1][0] == key:
+            runs[-1][1].append(item)
+        else:
+            runs.append((key, [item]))
+    return runs
 
 
 def _per_env(values: Optional[Sequence[Any]], n: int, name: str) -> list:

@@ -18,7 +18,7 @@ from ..parallel import serialised
 from ..scene.camera import Camera
 from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
-from ..scene.sky import check_sky, composite_sky
+from ..scene.sky import check_sky
 
 __all__ = ["RenderOutput", "render", "render_batch", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
@@ -112,7 +112,7 @@ def render(
         out = _render_numpy(g, viewmats, Ks, nears, width, height, np.zeros(3) if sky is not None else bg, features,
                             backend)
         if sky is not None:
-            out["rgb"] = composite_sky(out["rgb"], out["alpha"], sky, cams)
+            out["rgb"] = _composite_sky(out["rgb"], out["alpha"], sky, cams)
     if single:
         out = {k: (None if v is None else v[0]) for k, v in out.items()}
     return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
@@ -176,7 +176,7 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
                                                  bg) for parts, cam, bg in flat], features=features, cull=cull)
     for o, (_, cam, _, sky) in zip(outs, resolved):
         if sky is not None:          # as `render` does: the sky behind what the Gaussians leave uncovered
-            o["rgb"] = composite_sky(o["rgb"][None], o["alpha"][None], sky, [cam])[0]
+            o["rgb"] = _composite_sky(o["rgb"][None], o["alpha"][None], sky, [cam])[0]
     return [RenderOutput(**{k: o.get(k) for k in _OUTPUT_KEYS}) for o in outs]
 
 
@@ -228,6 +228,14 @@ def _source_parts(source: Source, t: float, background: Optional[Sequence[float]
     if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
     return gaussians, bg, sky
+
+def _composite_sky(rgb: np.ndarray, alpha: np.ndarray, sky: np.ndarray, cams: Sequence[Camera]) -> np.ndarray:
+    """The sky behind what the Gaussians leave uncovered (`scene.sky.composite_sky`, compiled), for
+    every backend's numpy output."""
+    from .cpu.sky import composite_sky_compiled
+
+    return composite_sky_compiled(rgb, alpha, sky, cams)
+
 
 def cameras_to_arrays(cams: Sequence[Camera]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
     """viewmats [C, 4, 4], Ks [C, 3, 3], nears [C], width, height of cameras of one resolution."""

@@ -168,3 +168,38 @@ def test_registered_task_ids_get_the_native_vector_env():
     ref, ref_info = single.reset(seed=1)
     assert np.array_equal(obs["rgb"][1], ref["rgb"]) and info["target"][1] == ref_info["target"]
     venv.close()
+
+
+@pytest.mark.parametrize("pipeline", [1, 3])
+def test_pipelined_chunks_match_single_envs(pipeline):
+    # pipeline=3 over 2 envs: one env per chunk (a worker thread renders one while the other is
+    # prepared or finished); pipeline=1: no worker thread
+    kw = dict(FAST, scene_pool=2)
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=pipeline, **kw)
+    singles = [make("MorphoSim/Track-v0", **kw) for _ in range(N)]
+    assert _rollout_compare(venv, singles, seed=11) >= N
+    assert (venv._worker is not None) == (pipeline > 1)
+    venv.close()
+    assert venv._worker is None
+
+
+def test_pipeline_argument_is_checked():
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError, match="pipeline"):
+            MorphoSimVectorEnv(1, pipeline=bad)
+
+
+def test_a_pipelined_vector_env_deep_copies_and_both_copies_step_alike():
+    import copy
+
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=2, **FAST)
+    venv.reset(seed=3)
+    a = np.full((N, 3), 0.2, np.float32)
+    venv.step(a)
+    twin = copy.deepcopy(venv)
+    assert twin._worker is None
+    obs, rew, _, _, _ = venv.step(a)
+    obs2, rew2, _, _, _ = twin.step(a)
+    assert np.array_equal(obs["rgb"], obs2["rgb"]) and np.array_equal(rew, rew2)
+    venv.close()
+    twin.close()
