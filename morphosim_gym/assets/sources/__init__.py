@@ -1,7 +1,7 @@
 """Asset sources, found at run time: each is skipped when it is not installed.
 
 `default_sources()` lists what this machine has: Sweet Home 3D furniture catalogues, robosuite's
-objects, Blender's sky panoramas, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
+objects, Blender's sky panoramas, 0 A.D.'s animals and props, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from .folder import FolderSource, folders_from_env
 from .robosuite import RobosuiteSource
 from .studiolights import StudioLightsSource
 from .sweethome3d import SweetHome3DSource
+from .zero_ad import ZeroADSource
 
 __all__ = [
     "SYSTEM_SOURCES",
@@ -23,6 +24,7 @@ __all__ = [
     "RobosuiteSource",
     "StudioLightsSource",
     "SweetHome3DSource",
+    "ZeroADSource",
     "default_sources",
 ]
 
@@ -31,6 +33,7 @@ SYSTEM_SOURCES: dict[str, Callable[[], AssetSource | None]] = {
     SweetHome3DSource.name: SweetHome3DSource.discover,
     RobosuiteSource.name: RobosuiteSource.discover,
     StudioLightsSource.name: StudioLightsSource.discover,
+    ZeroADSource.name: ZeroADSource.discover,
 }
 
 
