@@ -133,13 +133,15 @@ def _anchor_table(settings: bool) -> tuple[np.ndarray, list[tuple[str, str]], np
 def ground_noun(noun: str, settings: bool = False, floor: float | None = None, phrase: str | None = None) -> Grounding:
     """Ground a noun to a category (or, with ``settings=True``, a setting or the camera).
 
-    Tries the vocabulary, basic shapes and assets named by the noun first; then, with real assets
-    and WordNet installed, the checked grounding (`_ground_checked`); otherwise loads the embedding
-    model (once) and picks the nearest category for "a <phrase>" (``phrase`` defaults to the noun;
-    the rule parser passes the noun with its descriptive words, e.g. "golden retriever").
+    Tries the vocabulary, basic shapes and assets named by the noun first; then, as the grounding
+    level says (`_ground_by_level`), the checked grounding, a stand-in of the same kind, or the
+    nearest category for "a <phrase>" (``phrase`` defaults to the noun; the rule parser passes the
+    noun with its descriptive words, e.g. "golden retriever"). Loads the embedding model (once)
+    when it gets that far.
 
     Raises:
-        CommandError: below the floor; the message lists the known categories.
+        CommandError: nothing the level allows; the message lists the known categories and the
+            nearest candidates.
     """
     noun = noun.strip().lower()
     hit = ground_noun_vocabulary(noun, settings) or ground_noun_vocabulary(singular(noun), settings)
@@ -153,10 +155,14 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     if named is not None:
         return named
     floor = _default_floor(noun) if floor is None else floor
+    return _ground_by_level(noun, phrase, settings, floor, kind_noun=compound or noun)
+
+
+def _ground_by_level(noun: str, phrase: str | None, settings: bool, floor: float, kind_noun: str) -> Grounding:
+    """A noun no table or name grounds, at the grounding level in force (see the module doc)."""
     level = grounding_level()
     if level == "nearest" or not wordnet.available():
         return _ground_nearest(noun, phrase, settings, floor)
-    kind_noun = compound or noun
     checked = _ground_checked(noun, phrase or noun, settings, floor, kind_noun)
     if checked is not None:
         return checked
