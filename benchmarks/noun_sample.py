@@ -3,10 +3,13 @@
 assets on, for judging by a person (issue #19: the share a person would accept).
 
     .venv/bin/python benchmarks/noun_sample.py --seed 19 --n 50 [--draw-only]
+    .venv/bin/python benchmarks/noun_sample.py --seed 2027 --n 60 --exclude-seed 19 --exclude-n 50   # held out
 
-The sample is drawn from the list by `numpy.random.default_rng(seed)` before anything resolves.
+The sample is drawn from the list by `numpy.random.default_rng(seed)` before anything resolves
+(`--exclude-seed`: first leave out the nouns of an earlier sample, so the new one is held out).
 Each row: the noun, what it grounds to (a category, a shape, or "asset:<id>" with the asset's
-name), the method and similarity, or the refusal with its nearest candidates.
+name), the method ("kind": a stand-in of the same kind) and similarity, or the refusal with its
+nearest candidates. `--grounding` sets the grounding level (default: the library's, "kind").
 """
 
 from __future__ import annotations
@@ -23,8 +26,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 NOUNS = Path(__file__).resolve().parents[1] / "tests" / "language" / "nouns_300.txt"
 
 
-def draw(seed: int, n: int) -> list[str]:
-    nouns = [x.strip() for x in NOUNS.read_text().splitlines() if x.strip() and not x.startswith("#")]
+def all_nouns() -> list[str]:
+    return [x.strip() for x in NOUNS.read_text().splitlines() if x.strip() and not x.startswith("#")]
+
+
+def draw(seed: int, n: int, exclude: tuple[int, int] | None = None) -> list[str]:
+    """`n` nouns of the list by the seed; `exclude` (seed, n): without the nouns that sample drew."""
+    nouns = all_nouns()
+    if exclude is not None:
+        gone = set(draw(*exclude))
+        nouns = [x for x in nouns if x not in gone]
     return [nouns[i] for i in sorted(np.random.default_rng(seed).choice(len(nouns), n, replace=False).tolist())]
 
 
@@ -42,6 +53,8 @@ def resolve(noun: str) -> dict:
         return {"noun": noun, "result": f"setting {plan.setting}"}
     o = plan.objects[0]
     out = {"noun": noun, "result": o.category, "method": o.grounding, "similarity": o.similarity}
+    if o.grounding == "kind":
+        out["stand_in"] = True
     if o.category.startswith("asset:"):
         out["asset_name"] = asset_index().get(o.category[len("asset:"):]).name
     return out
@@ -52,13 +65,24 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=19)
     ap.add_argument("--n", type=int, default=50)
     ap.add_argument("--draw-only", action="store_true")
+    ap.add_argument("--exclude-seed", type=int, default=None, help="leave out the nouns of the sample of this seed")
+    ap.add_argument("--exclude-n", type=int, default=50, help="... of this size")
+    ap.add_argument("--grounding", default=None, help="grounding level (default: the library's)")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
-    sample = draw(args.seed, args.n)
-    print(f"sample (seed {args.seed}, {args.n}): {', '.join(sample)}")
+    exclude = None if args.exclude_seed is None else (args.exclude_seed, args.exclude_n)
+    sample = draw(args.seed, args.n, exclude)
+    held = f", without the seed-{exclude[0]} sample" if exclude else ""
+    print(f"sample (seed {args.seed}, {args.n}{held}): {', '.join(sample)}")
     if args.draw_only:
         return 0
     os.environ.pop("MORPHOSIM_ASSET_SOURCES", None)
+    if args.grounding:
+        os.environ["MORPHOSIM_GROUNDING"] = args.grounding
+    from morphosim_gym.language.grounding import grounding_level
+
+    level = grounding_level()
+    print(f"grounding level: {level}")
     import morphosim_gym.generate.compose  # noqa: F401  (registers the real assets as open-vocabulary candidates)
 
     rows = [resolve(n) for n in sample]
@@ -68,9 +92,10 @@ def main() -> int:
         else:
             sim = "" if r.get("similarity") is None else f" {r['similarity']:.2f}"
             print(f"  {r['noun']:18s} -> {r['result']}{' (' + r['asset_name'] + ')' if 'asset_name' in r else ''}"
-                  f" [{r.get('method', '')}{sim}]")
+                  f" [{r.get('method', '')}{sim}]{' STAND-IN' if r.get('stand_in') else ''}")
     if args.json:
-        args.json.write_text(json.dumps({"seed": args.seed, "sample": sample, "rows": rows}, indent=1) + "\n")
+        args.json.write_text(json.dumps({"seed": args.seed, "exclude": exclude, "grounding": level, "sample": sample,
+                                         "rows": rows}, indent=1) + "\n")
     return 0
 
 

@@ -67,10 +67,12 @@ class SimConfig:
         cache: cache on disk by content hash: generated clips, and with `reconstruction="oracle"`
             the composed scenes `generate` returns (`.msim` files under `cache_dir/scene/`).
         cache_dir: where; None = `default_cache_dir()`.
-        strict: every parse of the pipeline (generate, generate_clip, env scenes) raises `CommandError`
-            instead of substituting ("kangaroo" -> duck, see `morphosim_gym.language.substitutions`);
-            off (default), each substitution is a `SubstitutionWarning` and is recorded in the
-            scene's provenance.
+        grounding: the grounding level of every parse of the pipeline (generate, generate_clip, env
+            scenes), one of `language.grounding.LEVELS`; None = `$MORPHOSIM_GROUNDING`, else "kind".
+            "exact" raises `CommandError` instead of substituting anything ("kangaroo" -> a
+            stand-in, see `morphosim_gym.language.substitutions`); under the other levels each
+            substitution is a `SubstitutionWarning` and is recorded in the scene's provenance.
+        strict: deprecated alias of ``grounding="exact"``.
     """
 
     generator: str = "procedural"
@@ -81,6 +83,7 @@ class SimConfig:
     cache: bool = False
     cache_dir: Optional[str] = None
     strict: bool = False
+    grounding: Optional[str] = None
     diffusion: Optional["DiffusionConfig"] = None
     parser: str = "rules"
     llm: Optional["LLMConfig"] = None
@@ -88,6 +91,10 @@ class SimConfig:
     def __post_init__(self) -> None:
         GENERATORS.check(self.generator)
         PARSERS.check(self.parser)
+        if self.grounding is not None:
+            from .language.grounding import grounding_level
+
+            object.__setattr__(self, "grounding", grounding_level(self.grounding))
         if self.render_backend not in RENDER_BACKENDS:
             raise UnknownBackendError(f"Unknown render backend {self.render_backend!r}; known: "
                                       f"{', '.join(repr(b) for b in RENDER_BACKENDS)}")
@@ -145,12 +152,14 @@ class MorphoSim:
     # -------------------------------------------------------------- parsing
     def parse(self, text: str, scene: Scene4D | None = None) -> Any:
         """The plan of a command (see `morphosim_gym.parse`), by the parser `SimConfig.parser` names
-        (the one edits use too); with `strict` a substitution is a `CommandError`, else a
-        `SubstitutionWarning`."""
+        (the one edits use too), at the grounding level `SimConfig.grounding`: "exact" makes a
+        substitution a `CommandError`, the other levels a `SubstitutionWarning`."""
+        from .language.grounding import using_level
         from .language.substitutions import check_strict, warn
 
-        plan = self.parser.parse(text, scene)
-        if self.config.strict:
+        with using_level("exact" if self.config.strict else self.config.grounding) as level:
+            plan = self.parser.parse(text, scene)
+        if level == "exact":
             check_strict(plan)
         warn(plan)
         return plan

@@ -144,6 +144,20 @@ class AssetFiles:
                         self._diffuse |= set(_DIFFUSE.findall(blob.decode("latin-1")))
         return self._diffuse
 
+    def texture_member(self) -> bytes | None:
+        """The bytes of the colour texture the record names (`extra["texture"]`, a path next to a
+        plain file or a member of the same zip), or None when it names none.
+
+        Raises:
+            AssetError: the named texture is missing or unreadable.
+        """
+        name = self.record.extra.get("texture")
+        if not name:
+            return None
+        if not self.record.member:
+            name = os.path.join(self.folder, name)
+        return self._read_exact(name)
+
     def content_hash(self) -> str:
         """sha256 over the main file and every file it refers to (the conversion cache's key part)."""
         main = self.main()
@@ -152,6 +166,10 @@ class AssetFiles:
             for name, blob in sorted(self.references(main)):
                 h.update(name.encode())
                 h.update(hashlib.sha256(blob).digest())
+        texture = self.texture_member()
+        if texture is not None:
+            h.update(str(self.record.extra["texture"]).encode())
+            h.update(hashlib.sha256(texture).digest())
         return h.hexdigest()
 
     def resolver(self) -> _AssetResolver:

@@ -1,6 +1,7 @@
 """Loading a mesh asset into plain arrays: `MeshPart`s of triangles with their material.
 
-trimesh parses OBJ (with MTL and textures), GLB/GLTF and PLY; each part keeps its triangles in
+trimesh parses OBJ (with MTL and textures), GLB/GLTF and PLY; `pmd.py` reads 0 A.D.'s PMD (its
+texture named by the record's `extra["texture"]`); each part keeps its triangles in
 the file's frame (scene-graph transforms applied), per-corner UVs when it has a texture, the
 texture as float RGB, and the material's diffuse colour and opacity.
 """
@@ -15,13 +16,14 @@ from pathlib import PurePosixPath
 import numpy as np
 import trimesh
 
-from .errors import AssetError
+from .errors import AssetError, AssetWarning
 from .files import AssetFiles
+from .pmd import read_pmd
 from .record import AssetRecord
 
 __all__ = ["MeshPart", "load_mesh_parts"]
 
-_FILE_TYPES = {".obj": "obj", ".glb": "glb", ".gltf": "gltf", ".ply": "ply"}
+_FILE_TYPES = {".obj": "obj", ".glb": "glb", ".gltf": "gltf", ".ply": "ply", ".pmd": "pmd"}
 
 
 @dataclass
@@ -108,6 +110,8 @@ def load_mesh_parts(record: AssetRecord, files: AssetFiles | None = None) -> lis
     if file_type is None:
         raise AssetError(f"Expected a mesh file ({', '.join(_FILE_TYPES)}), found {files.label}")
     data = files.main()
+    if file_type == "pmd":
+        return [_pmd_part(files, data)]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -122,6 +126,44 @@ def load_mesh_parts(record: AssetRecord, files: AssetFiles | None = None) -> lis
     if not parts:
         raise AssetError(f"The mesh {files.label} has no triangles")
     return parts
+
+
+def _pmd_part(files: AssetFiles, data: bytes) -> MeshPart:
+    """One textured part of a 0 A.D. PMD mesh; its colour texture is `extra["texture"]` (a missing or
+    unreadable one warns, naming it, and the part takes the default colour)."""
+    try:
+        pmd = read_pmd(data)
+    except ValueError as exc:
+        raise AssetError(f"Cannot parse the mesh {files.label} ({exc})") from None
+    if len(pmd.faces) == 0:
+        raise AssetError(f"The mesh {files.label} has no triangles")
+    texture = None
+    name = str(files.record.extra.get("texture", ""))
+    if name:
+        try:
+            texture = _decode_image(files.texture_member())
+        except (AssetError, OSError, ValueError) as exc:
+            warnings.warn(AssetWarning(f"Texture {name!r} of {files.label} is unreadable ({exc}); using the "
+                                       f"material colour"), stacklevel=3)
+    uvs = pmd.uvs[pmd.faces] if texture is not None else None     # v runs up the image, as MeshPart's
+    return MeshPart(pmd.positions[pmd.faces], uvs, texture,
+                    _rgba(None)[:3])
+
+
+def _decode_image(blob: bytes | None) -> np.ndarray | None:
+    """RGB uint8 of an image file's bytes (DDS with DXT1/3/5 included, by Pillow)."""
+    if blob is None:
+        return None
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(blob)) as im:
+            arr = np.asarray(im.convert("RGB"), dtype=np.uint8)
+    except Exception as exc:  # noqa: BLE001 - PIL raises many types for a bad image
+        raise ValueError(f"{type(exc).__name__}: {exc}") from None
+    if arr.ndim != 3 or arr.shape[0] == 0 or arr.shape[1] == 0:
+        raise ValueError("an empty image")
+    return arr
 
 
 def _world_meshes(scene: trimesh.Scene) -> list[trimesh.Trimesh]:

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from ..extras import EXIT_MISSING_EXTRA, install_line, require_extra
+from ..language.grounding_cli import add_grounding_flags, grounding_from_args
 from ..policies import POLICY_SPEC_HELP
 
 __all__ = ["register", "exit_code", "MAX_EXIT_FAILED", "EXIT_NOT_RUN"]
@@ -49,9 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="reconstruction settings of fit worlds (morphosim_gym.reconstruct.presets); default: the "
                         "suite's, else full")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--strict", action="store_true",
-                   help="an episode whose scene prompt has a word the library would substitute (e.g. 'kangaroo' "
-                        "-> duck) fails with that CommandError instead of running on the substitute")
+    add_grounding_flags(p)     # --grounding exact (old: --strict): a substituted prompt word fails its episodes
     p.add_argument("--list", action="store_true", help="list the built-in suites and exit")
     p.set_defaults(func=_bench)
 
@@ -110,7 +109,7 @@ def _bench(args: argparse.Namespace) -> int:
         out = args.out or f"out/bench/{suite.name}"
         result = run_sweep(suite, args.policy or ["oracle"], out, backend=args.backend, workers=args.workers,
                            cache_dir=args.cache_dir, address=args.ray_address, progress=not args.no_progress,
-                           strict=args.strict)
+                           strict=_grounding_for_sweep(args))
     except ValueError as exc:
         print(f"morphosim bench: error: {exc}", file=sys.stderr)
         return EXIT_NOT_RUN
@@ -125,3 +124,17 @@ def _quality(args: argparse.Namespace) -> int:
     from .quality import quality_main
 
     return quality_main(args)
+
+
+def _grounding_for_sweep(args: argparse.Namespace) -> bool:
+    """Whether the sweep refuses substituted prompt words ("exact"); another level asked for is set as
+    `$MORPHOSIM_GROUNDING` for this process and the workers it starts."""
+    import os
+
+    from ..language.grounding import LEVEL_VAR
+
+    level = grounding_from_args(args)
+    if level is not None and level != "exact":
+        os.environ[LEVEL_VAR] = level
+    return level == "exact"
+

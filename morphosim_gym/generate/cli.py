@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..language.grounding_cli import add_grounding_flags, grounding_from_args
+
 __all__ = ["register", "write_video"]
 
 
@@ -25,8 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=None, help="clip frames (default 49, or the diffusion config's)")
     p.add_argument("--fps", type=float, default=None, help="frame rate (default 8, or the diffusion config's)")
     p.add_argument("--format", choices=["mp4", "gif"], default="mp4")
-    p.add_argument("--strict", action="store_true",
-                   help="fail (exit 2) instead of substituting: a noun outside the library, a repaired misspelling")
+    add_grounding_flags(p)
     p.add_argument("--reconstruct", action="store_true",
                    help="write the scene reconstructed from the clip (about two minutes) instead of the "
                         "generator's ground truth (a generator without one, e.g. diffusion, writes no scene "
@@ -101,7 +102,8 @@ def _sim_config(args: argparse.Namespace) -> object:
     # a generator other than the procedural one may have no ground truth: fit when asked, else keep its clip
     reconstruction = "oracle" if args.generator == "procedural" and not args.reconstruct else "fit"
     return SimConfig(generator=args.generator, generation=generation, reconstruction=reconstruction,
-                     diffusion=diffusion, parser=args.parser, strict=args.strict)
+                     diffusion=diffusion, parser=args.parser,
+                     grounding=grounding_from_args(args))
 
 
 def write_video(frames: list[np.ndarray], path: Path, fps: float) -> Path:

@@ -34,7 +34,7 @@ __all__ = ["ASSET_MODES", "ASSET_PREFIX", "EXCLUDED_WORDS", "SETTING_SKIES", "as
 ASSET_MODES = ("auto", "off", "require")
 ASSET_PREFIX = "asset:"
 ENV_SOURCES = "MORPHOSIM_ASSET_SOURCES"
-INSTALL_HINT = "apt install sweethome3d-furniture blender-data"
+INSTALL_HINT = "apt install sweethome3d-furniture 0ad-data blender-data"
 _log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
 
@@ -63,7 +63,7 @@ def asset_index() -> AssetIndex:
 @functools.lru_cache(maxsize=1)
 def _notice_once() -> None:
     _log.warning("No real asset source is installed: objects use the procedural builders "
-                 "(real furniture, vehicles and skies: %s)", INSTALL_HINT)
+                 "(real furniture, vehicles, animals and skies: %s)", INSTALL_HINT)
 
 
 def uses_assets(mode: str) -> bool:

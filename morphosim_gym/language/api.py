@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import CommandError, UnknownBackendError
+from .grounding import using_level
 from .plan import Plan
 from .substitutions import check_strict
 
@@ -12,7 +13,7 @@ __all__ = ["parse"]
 
 
 def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend: str = "rules",
-          llm: Any = None, strict: bool = False) -> Plan:
+          llm: Any = None, grounding: str | None = None, strict: bool = False) -> Plan:
     """Turn a command into a validated `Plan`.
 
     Args:
@@ -27,9 +28,12 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
             `morphosim_gym.language.llm`), or "auto" ("llm" when an endpoint is configured, else
             "rules"), or a ``"module:factory"`` parser (see `language.backends`).
         llm: an `LLMConfig` for the "llm"/"auto" backends (default: from the environment).
-        strict: raise `CommandError` when the plan would substitute anything for what the text asks
-            (a noun outside the library grounded to the nearest one, a repaired misspelling; see
+        grounding: the grounding level of nouns outside the vocabulary, one of
+            `grounding.LEVELS` (None: `$MORPHOSIM_GROUNDING`, else "kind"; see `grounding.py`).
+            "exact" raises `CommandError` when the plan would substitute anything for what the text
+            asks (a noun outside the library, a repaired misspelling; see
             `morphosim_gym.language.substitutions`) instead of returning the plan with them.
+        strict: deprecated alias of ``grounding="exact"``.
 
     Returns:
         A `Plan` with mode "generate" or "edit" (follow-up edits of a compound command in
@@ -44,7 +48,8 @@ def parse(text: str, scene: Any = None, *, require_scene: bool = False, backend:
         parser = PARSERS.create(PARSERS.check(backend), llm)
     except UnknownBackendError as e:
         raise CommandError(f"Expected backend {PARSERS.known()}, found {backend!r}") from e
-    plan = parser.parse(text, scene, require_scene=require_scene)
-    if strict:
+    with using_level("exact" if strict else grounding) as level:
+        plan = parser.parse(text, scene, require_scene=require_scene)
+    if level == "exact":
         check_strict(plan)
     return plan

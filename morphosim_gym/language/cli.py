@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .grounding_cli import add_grounding_flags, grounding_from_args
+
 __all__ = ["register"]
 
 
@@ -18,8 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(imports and runs that module)")
     p.add_argument("--require-scene", action="store_true", help="fail on an edit with no scene to apply to")
     p.add_argument("--compact", action="store_true", help="one-line JSON")
-    p.add_argument("--strict", action="store_true",
-                   help="fail (exit 2) instead of substituting: a noun outside the library, a repaired misspelling")
+    add_grounding_flags(p)
     p.set_defaults(func=_parse)
 
 
@@ -32,7 +33,8 @@ def _parse(args: argparse.Namespace) -> int:
 
         scene = load_scene(args.scene)
     text = " ".join(args.text)
-    plan = parse(text, scene, require_scene=args.require_scene, backend=args.backend, strict=args.strict)
+    plan = parse(text, scene, require_scene=args.require_scene, backend=args.backend,
+                 grounding=grounding_from_args(args))
     from .substitutions import warn
 
     warn(plan)                  # one note per substitution on stderr (the JSON on stdout stays clean)

@@ -11,10 +11,21 @@ compared with each category's name phrase and description, and the best category
 
 otherwise `CommandError` lists the known categories. So "sedan" -> car, "puppy" -> dog.
 
-Before that, an asset the noun names wins ("guitar" -> "Electric guitar"), and with real assets and
-WordNet installed (`hypernyms.py`) the grounding is checked: a category the noun is a kind of, else
-a candidate WordNet relates to it or one at least `CHECKED_FLOOR` similar; a noun none of these
-matches takes the nearest candidate as above, or with `$MORPHOSIM_GROUNDING=strict` is refused.
+Before that, an asset the noun names wins ("guitar" -> "Electric guitar"), and with WordNet
+installed (`hypernyms.py`) the grounding is checked: a category the noun is a kind of, else a
+candidate WordNet relates to it or one at least `CHECKED_FLOOR` similar. What happens to a noun
+nothing checked matches is the grounding level (`LEVELS`, one setting; `grounding_level`):
+
+- "exact": like "kind", and then any substitution at all is refused (`parse(grounding="exact")`,
+  the old `strict=True`);
+- "checked": refused, the `CommandError` listing the nearest candidates;
+- "kind" (default): a stand-in of the same kind, the most similar candidate sharing the noun's
+  nearest meaningful WordNet hypernym ("kangaroo" -> a mammal, never a duck;
+  `hypernyms.GENERIC_KINDS` such as animal, artifact, object do not count), always a
+  substitution (warned, recorded in provenance); refused like "checked" when nothing shares a kind;
+- "nearest": the nearest category, shape or asset above the floors (the grounding before WordNet).
+
+Without WordNet every level but "exact" grounds as "nearest" (no kinds to check).
 
 Edit targets resolve against a scene's objects (duck-typed: ``.objects`` with ``.name`` and
 ``.category``; ``.id``, ``.role`` and ``.color`` are used when present) by, in order: everything
@@ -27,6 +38,9 @@ from __future__ import annotations
 import os
 import re
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -37,8 +51,9 @@ from . import embeddings, hypernyms, open_vocab, wordnet
 from .lexicon import english_words
 from .vocabulary import CATEGORIES, SETTINGS, noun_to_category, singular, word_to_setting
 
-__all__ = ["GROUNDING_FLOOR", "SCENE_FLOOR", "Grounding", "ground_noun", "ground_noun_vocabulary", "grounding_policy",
-           "SceneItem", "scene_items", "resolve_in_scene", "CAMERA_WORDS", "ALL_WORDS"]
+__all__ = ["DEFAULT_LEVEL", "GROUNDING_FLOOR", "LEVELS", "LEVEL_VAR", "SCENE_FLOOR", "Grounding", "ground_noun",
+           "ground_noun_vocabulary", "grounding_level", "using_level", "SceneItem", "scene_items", "resolve_in_scene",
+           "CAMERA_WORDS", "ALL_WORDS"]
 
 GROUNDING_FLOOR = 0.45
 # Words outside the tokenizer's English word list (made-up words, rare compounds) need more: made-up
@@ -48,9 +63,13 @@ SCENE_FLOOR = 0.45
 # With real assets (an open world), a noun WordNet does not relate to a candidate needs this much:
 # "kitten" -> cat (0.77) passes, "tiger" -> elephant (0.53) and "pear" -> apple (0.72) do not.
 CHECKED_FLOOR = 0.75
-POLICY_VAR = "MORPHOSIM_GROUNDING"
-POLICIES = ("nearest", "strict")
+LEVEL_VAR = "MORPHOSIM_GROUNDING"
+LEVELS = ("exact", "checked", "kind", "nearest")
+DEFAULT_LEVEL = "kind"
+# old spellings: $MORPHOSIM_GROUNDING=strict was today's "checked" (deprecated, still read)
+LEVEL_ALIASES = {"strict": "checked"}
 CHECKED_TOP = 8           # candidates (categories, and shapes and assets) checked against WordNet
+KIND_TOP = 100            # open candidates (shapes and assets, most similar first) a stand-in is looked for among
 AMBIGUITY_MARGIN = 0.03   # other categories this close to the best match make a target ambiguous
 ALL_MARGIN = 0.1          # "all the animals": every category this close to the best match
 CAMERA_WORDS = ("camera", "view", "viewpoint", "shot", "cam")
@@ -64,13 +83,15 @@ _REJECT_ANCHORS = ("something abstract", "an abstract idea", "a feeling", "a sou
 @dataclass(frozen=True)
 class Grounding:
     """Result of grounding a noun: kind is "category", "setting" or "camera"; method is
-    "vocabulary" or "embedding" (then `similarity` is the cosine similarity)."""
+    "vocabulary", "embedding" or "open" (then `similarity` is the cosine similarity), or "kind" for
+    a stand-in of the same kind (`shared_kind` names the WordNet sense both are kinds of)."""
 
     noun: str
     category: str
     kind: str = "category"
     method: str = "vocabulary"
     similarity: float | None = None
+    shared_kind: str | None = None
 
 
 def ground_noun_vocabulary(noun: str, settings: bool = False) -> Grounding | None:
@@ -112,13 +133,15 @@ def _anchor_table(settings: bool) -> tuple[np.ndarray, list[tuple[str, str]], np
 def ground_noun(noun: str, settings: bool = False, floor: float | None = None, phrase: str | None = None) -> Grounding:
     """Ground a noun to a category (or, with ``settings=True``, a setting or the camera).
 
-    Tries the vocabulary, basic shapes and assets named by the noun first; then, with real assets
-    and WordNet installed, the checked grounding (`_ground_checked`); otherwise loads the embedding
-    model (once) and picks the nearest category for "a <phrase>" (``phrase`` defaults to the noun;
-    the rule parser passes the noun with its descriptive words, e.g. "golden retriever").
+    Tries the vocabulary, basic shapes and assets named by the noun first; then, as the grounding
+    level says (`_ground_by_level`), the checked grounding, a stand-in of the same kind, or the
+    nearest category for "a <phrase>" (``phrase`` defaults to the noun; the rule parser passes the
+    noun with its descriptive words, e.g. "golden retriever"). Loads the embedding model (once)
+    when it gets that far.
 
     Raises:
-        CommandError: below the floor; the message lists the known categories.
+        CommandError: nothing the level allows; the message lists the known categories and the
+            nearest candidates.
     """
     noun = noun.strip().lower()
     hit = ground_noun_vocabulary(noun, settings) or ground_noun_vocabulary(singular(noun), settings)
@@ -132,11 +155,24 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     if named is not None:
         return named
     floor = _default_floor(noun) if floor is None else floor
-    if open_vocab.has_assets() and wordnet.available():
-        checked = _ground_checked(noun, phrase or noun, settings, floor, kind_noun=compound or noun)
-        if checked is not None:
-            return checked
-    return _ground_nearest(noun, phrase, settings, floor)
+    return _ground_by_level(noun, phrase, settings, floor, kind_noun=compound or noun)
+
+
+def _ground_by_level(noun: str, phrase: str | None, settings: bool, floor: float, kind_noun: str) -> Grounding:
+    """A noun no table or name grounds, at the grounding level in force (see the module doc)."""
+    level = grounding_level()
+    if level == "nearest" or not wordnet.available():
+        return _ground_nearest(noun, phrase, settings, floor)
+    checked = _ground_checked(noun, phrase or noun, settings, floor, kind_noun)
+    if checked is not None:
+        return checked
+    stand_in = _ground_kind(noun, phrase or noun, kind_noun) if level in ("kind", "exact") else None
+    if stand_in is not None:
+        return stand_in
+    best = open_vocab.nearest_candidates(phrase or noun, k=1)
+    why = ("nothing checked shows it" if level == "checked" else "nothing checked shows it and no candidate is "
+           "of the same kind") + (f"; the most similar is {best[0].text!r} at {best[0].similarity:.2f}" if best else "")
+    raise _unknown_noun(noun, phrase or noun, settings, why + f"; grounding level {level!r}")
 
 
 def _named_asset(noun: str, phrase: str | None, compound: bool) -> Grounding | None:
@@ -151,13 +187,36 @@ def _default_floor(noun: str) -> float:
     return GROUNDING_FLOOR if (not words or all(w in words for w in noun.split())) else GROUNDING_FLOOR_UNKNOWN_WORD
 
 
-def grounding_policy() -> str:
-    """`$MORPHOSIM_GROUNDING`: "nearest" (default: a noun nothing checked matches takes the nearest
-    category, shape or asset) or "strict" (it is refused, listing the nearest candidates)."""
-    policy = os.environ.get(POLICY_VAR, "nearest").strip().lower() or "nearest"
-    if policy not in POLICIES:
-        raise ValueError(f"Expected ${POLICY_VAR} in {POLICIES}, found {policy!r}")
-    return policy
+_level: ContextVar[str | None] = ContextVar("morphosim_grounding_level", default=None)
+
+
+def grounding_level(value: str | None = None) -> str:
+    """The grounding level in force: `value` when given, else the one `using_level` set, else
+    `$MORPHOSIM_GROUNDING`, else `DEFAULT_LEVEL` ("kind"). Old spellings (`LEVEL_ALIASES`) are read.
+
+    Raises:
+        ValueError: not one of `LEVELS` (the message names where it came from).
+    """
+    where = "grounding"
+    if value is None:
+        value = _level.get()
+    if value is None:
+        value, where = os.environ.get(LEVEL_VAR, "").strip() or DEFAULT_LEVEL, f"${LEVEL_VAR}"
+    level = LEVEL_ALIASES.get(str(value).strip().lower(), str(value).strip().lower())
+    if level not in LEVELS:
+        raise ValueError(f"Expected {where} in {LEVELS}, found {value!r}")
+    return level
+
+
+@contextmanager
+def using_level(level: str | None) -> Iterator[str]:
+    """Ground with `level` inside the block (None: leave the level in force as it is)."""
+    token = _level.set(grounding_level(level)) if level is not None else None
+    try:
+        yield grounding_level()
+    finally:
+        if token is not None:
+            _level.reset(token)
 
 
 def _ground_nearest(noun: str, phrase: str | None, settings: bool, floor: float) -> Grounding:
@@ -211,11 +270,27 @@ def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_n
             method = "open" if kind_ == "open" else "embedding"
             return Grounding(noun, label, kind="category" if kind_ == "open" else kind_, method=method,
                              similarity=round(sim, 4))
-    if grounding_policy() != "strict":
+    return None
+
+
+def _ground_kind(noun: str, phrase: str, kind_noun: str) -> Grounding | None:
+    """A stand-in of the same kind: among the categories and the `KIND_TOP` most similar open
+    candidates, those sharing the noun's nearest meaningful WordNet hypernym
+    (`hypernyms.shared_kind`), the most similar; None when none shares one."""
+    vec, labels, _ = _anchor_table(False)
+    q = embeddings.embed([f"a {phrase}"])[0]
+    sims = vec @ q
+    pool: list[tuple[str, float, tuple[int, str] | None]] = []
+    for c in CATEGORIES:
+        sim = max(float(sims[i]) for i, lab in enumerate(labels) if lab == ("category", c))
+        pool.append((c, sim, hypernyms.shared_kind(kind_noun, category=c)))
+    for m in open_vocab.nearest_candidates(phrase, k=KIND_TOP):
+        pool.append((m.category, m.similarity, hypernyms.shared_kind(kind_noun, text=m.text)))
+    kinds = [(d, -sim, label, name) for label, sim, hit in pool if hit is not None for d, name in [hit]]
+    if not kinds:
         return None
-    best = max(pool.values())
-    raise _unknown_noun(noun, phrase, settings, f"nothing it is a kind of, and the most similar, {best[1]!r} at "
-                        f"{best[0]:.2f}, is below {CHECKED_FLOOR:.2f}")
+    _, neg_sim, label, name = min(kinds)
+    return Grounding(noun, label, method="kind", similarity=round(-neg_sim, 4), shared_kind=name)
 
 
 # -- scene resolution --------------------------------------------------------------------------------

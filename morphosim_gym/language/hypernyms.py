@@ -16,7 +16,7 @@ from functools import lru_cache
 from . import wordnet
 from .vocabulary import singular
 
-__all__ = ["MAX_ASSET_DEPTH", "head_word", "kind_category", "related", "visible_senses"]
+__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "head_word", "kind_category", "related", "shared_kind", "visible_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
 MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
@@ -98,3 +98,47 @@ def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | No
                                                   and t.n_hyponyms <= MAX_HYPONYMS):
                 return True
     return False
+
+
+# WordNet senses too general to make a stand-in "of the same kind": everything is an object, a
+# whole, an artifact, an organism... ("kangaroo" and "duck" share only "animal" and above).
+GENERIC_KINDS = frozenset({
+    "entity", "physical_entity", "abstraction", "thing", "object", "whole", "unit", "part", "portion",
+    "natural_object", "causal_agent", "artifact", "artefact", "instrumentality", "instrumentation", "device",
+    "container", "structure", "construction", "covering", "commodity", "equipment", "implement", "creation",
+    "article", "material", "system", "living_thing", "organism", "being", "animal", "animate_being", "beast",
+    "fauna", "chordate", "vertebrate", "craniate", "invertebrate", "person", "individual", "plant", "flora",
+    "vascular_plant", "matter", "substance", "solid", "fluid", "liquid", "food", "nutrient", "nutriment",
+    "foodstuff", "food_product", "produce", "green_goods", "solid_food", "plant_organ", "plant_part",
+    "plant_structure", "natural_object",
+})
+
+
+def _meaningful(offset: int) -> bool:
+    s = wordnet.synset(offset)
+    return s is not None and not (set(s.lemmas) & GENERIC_KINDS)
+
+
+def shared_kind(noun: str, text: str | None = None, category: str | None = None) -> tuple[int, str] | None:
+    """How close a candidate (an asset's name `text`, or a generator `category`) is in kind to the
+    noun: (steps from the noun's most frequent visible sense up to the nearest meaningful sense both
+    are kinds of, that sense's first lemma), or None when they share none (`GENERIC_KINDS` do not
+    count) or WordNet does not know either."""
+    if not wordnet.available():
+        return None
+    mine = _noun_senses(noun)
+    if not mine:
+        return None
+    up = _closure(mine[0].offset)
+    theirs = [s.offset for s in (_text_senses(text) if text is not None else ())]
+    if category is not None:
+        theirs += sorted(_category_senses(category))
+    best: tuple[int, int] | None = None
+    for t in theirs:
+        for off in _closure(t):
+            d = up.get(off)
+            if d is not None and (best is None or d < best[0]) and _meaningful(off):
+                best = (d, off)
+    if best is None:
+        return None
+    return best[0], wordnet.synset(best[1]).lemmas[0].replace("_", " ")

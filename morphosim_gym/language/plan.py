@@ -69,7 +69,7 @@ TEXTURE_PATTERNS = ("checkered", "striped", "dotted", "metallic", "matte", "glos
 INSERT_RELATIONS = ("next_to", "occluding", "behind", "in_front")
 SENSOR_EFFECTS = ("noise", "blur", "jpeg")
 RECOLOR_MODES = ("assign", "additive", "multiplicative")
-GROUNDINGS = ("vocabulary", "embedding", "open", "given")
+GROUNDINGS = ("vocabulary", "embedding", "open", "kind", "given")   # "kind": a stand-in of the same kind
 MAX_COUNT = 20
 MAX_SPEED = 10.0
 

@@ -2,8 +2,10 @@
 
 A plan substitutes when it
 
-- grounds a noun outside the vocabulary to the nearest thing it has ("kangaroo" -> duck, by embedding;
+- grounds a noun outside the vocabulary to the nearest thing it has ("sedan" -> car, by embedding;
   "teapot" -> an asset): kind "noun", with the similarity;
+- stands in for a noun nothing shows by a thing of the same kind ("kangaroo" -> a deer, both mammals;
+  grounding level "kind", see `grounding.py`): kind "stand-in", with the similarity;
 - repairs a misspelt word to a parser word one edit away ("bleu" -> blue, "roling" -> rolling):
   kind "colour" when the repair is a colour, "motion" when it is a motion verb, else "word".
 
@@ -14,9 +16,11 @@ is not in the library: using duck (similarity 0.59)"). How they surface:
   `generate_clip`, env creation and every CLI command that makes scenes; the CLI prints each as one
   line, "morphosim <command>: note: ...", on stderr;
 - the scene's `provenance.substitutions` ((asked, used, similarity) triples; `morphosim info` shows them);
-- strict mode turns them into a `CommandError` naming each: `parse(text, strict=True)`,
-  `SimConfig(strict=True)` / `MorphoSim(strict=True)` (every parse of the pipeline, env scenes
-  included), and `--strict` on `morphosim parse` / `generate` / `view` / `bench`.
+- the grounding level "exact" turns them into a `CommandError` naming each: `parse(text,
+  grounding="exact")`, `SimConfig(grounding="exact")` / `MorphoSim(grounding="exact")` (every parse
+  of the pipeline, env scenes included), `$MORPHOSIM_GROUNDING=exact`, and `--grounding exact` on
+  `morphosim parse` / `generate` / `view` / `bench`. The old spellings `strict=True` and `--strict`
+  still mean "exact" (deprecated aliases).
 """
 
 from __future__ import annotations
@@ -82,8 +86,10 @@ def plan_substitutions(plan: Any) -> tuple[Substitution, ...]:
     subs: list[Substitution] = list(_typo_repairs(plan.text))
     for p in _plans(plan):
         for o in getattr(p, "objects", ()):
-            if getattr(o, "grounding", None) in ("embedding", "open"):
-                subs.append(Substitution("noun", o.noun, o.category, o.similarity))
+            grounding = getattr(o, "grounding", None)
+            if grounding in ("embedding", "open", "kind"):
+                subs.append(Substitution("stand-in" if grounding == "kind" else "noun", o.noun, o.category,
+                                         o.similarity))
     seen, out = set(), []
     for s in subs:
         if s not in seen:
@@ -94,18 +100,21 @@ def plan_substitutions(plan: Any) -> tuple[Substitution, ...]:
 
 def describe(sub: Substitution) -> str:
     """One line a person reads."""
+    sim = f" (similarity {sub.similarity:.2f})" if sub.similarity is not None else ""
     if sub.kind == "noun":
-        sim = f" (similarity {sub.similarity:.2f})" if sub.similarity is not None else ""
         return f"noun {sub.asked!r} is not in the library: using {sub.used}{sim}"
+    if sub.kind == "stand-in":
+        return f"noun {sub.asked!r} is not in the library: using {sub.used}, a stand-in of the same kind{sim}"
     return f"{sub.kind} {sub.asked!r} read as {sub.used!r}"
 
 
 def check_strict(plan: Any) -> None:
-    """Raise a `CommandError` naming every substitution of the plan (strict mode)."""
+    """Raise a `CommandError` naming every substitution of the plan (grounding level "exact", the old strict mode)."""
     subs = plan_substitutions(plan)
     if subs:
-        raise CommandError(f"Could not honour {plan.text!r} exactly (strict): " + "; ".join(describe(s) for s in subs)
-                           + ". Use words the library has, or leave strict mode off to accept the substitutes")
+        raise CommandError(f"Could not honour {plan.text!r} exactly (grounding 'exact', formerly strict): "
+                           + "; ".join(describe(s) for s in subs)
+                           + ". Use words the library has, or another grounding level to accept the substitutes")
 
 
 def warn(plan: Any, stacklevel: int = 3) -> tuple[Substitution, ...]:

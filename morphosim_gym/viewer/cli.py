@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from ..extras import require_extra
+from ..language.grounding_cli import add_grounding_flags, grounding_from_args
 from ..policies import POLICY_SPEC_HELP
 
 __all__ = ["register"]
@@ -34,9 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "or 'fit' (reconstructed from the generated clip, minutes)")
     p.add_argument("--detail", type=float, default=None,
                    help="Gaussian budget multiplier of generated scenes (default 1; with --env, the env's default)")
-    p.add_argument("--strict", action="store_true",
-                   help="fail (exit 2) instead of substituting in a prompt: a noun outside the library, a repaired "
-                        "misspelling")
+    add_grounding_flags(p)
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default: this machine only)")
     p.add_argument("--port", type=int, default=8080, help="port (the next free one if taken; 0: any)")
     p.add_argument("--resolution", type=int, default=512, help="longer side of streamed frames, pixels")
@@ -80,7 +79,8 @@ def _view(args: argparse.Namespace) -> int:
 
     import_viser()                                  # fail before generating anything
     detail = 1.0 if args.detail is None else args.detail
-    sim = MorphoSim(reconstruction=args.reconstruction, generation=GenerationConfig(detail=detail), strict=args.strict)
+    sim = MorphoSim(reconstruction=args.reconstruction, generation=GenerationConfig(detail=detail),
+                    grounding=grounding_from_args(args))
     print("morphosim view: preparing the scene ...", flush=True)
     session = ViewerSession.from_source(args.source, sim=sim, seed=args.seed)
     session.warm_up()

@@ -6,16 +6,23 @@ import numpy as np
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.language import embeddings
-from morphosim_gym.language.grounding import GROUNDING_FLOOR, ground_noun
+from morphosim_gym.language import embeddings, wordnet
+from morphosim_gym.language.grounding import GROUNDING_FLOOR, ground_noun, using_level
 
 
 @pytest.mark.parametrize("noun, category", [("sedan", "car"), ("puppy", "dog"), ("kitten", "cat"),
                                             ("parrot", "bird"), ("stallion", "horse"), ("teacup", "cup"),
                                             ("helicopter", "airplane"), ("vehicle", "car")])
 def test_unknown_nouns_ground_to_the_nearest_category(minilm, noun, category):
-    g = ground_noun(noun)
+    with using_level("nearest"):
+        g = ground_noun(noun)
     assert (g.category, g.method) == (category, "embedding")
+    assert g.similarity >= GROUNDING_FLOOR
+    # the default level ("kind") agrees; a helicopter is not an airplane, so with WordNet it is a
+    # stand-in of the same kind (an aircraft) rather than a checked match
+    g = ground_noun(noun)
+    kind = "kind" if noun == "helicopter" and wordnet.available() else "embedding"
+    assert (g.category, g.method) == (category, kind)
     assert g.similarity >= GROUNDING_FLOOR
 
 

@@ -66,15 +66,56 @@ def test_named_assets_beat_the_nearest_category(real):
     assert "bunkbed" in ground_named("bunk bed").category          # the name without its space
 
 
-def test_strict_policy_refuses_what_nothing_shows(real, monkeypatch):
+def _needs_wordnet():
     from morphosim_gym.language import wordnet
     if not wordnet.available():
         pytest.skip("needs WordNet (apt install wordnet-base)")
-    monkeypatch.setenv("MORPHOSIM_GROUNDING", "strict")
-    with pytest.raises(CommandError, match="tiger.*Nearest shapes and assets: .+\\(0\\.\\d\\d\\)"):
-        parse("a tiger")
-    assert parse("an eagle").objects[0].category == "bird"       # a kind of bird (WordNet)
-    assert parse("a kitten").objects[0].category == "cat"        # very similar (0.77)
+
+
+def test_checked_level_refuses_what_nothing_shows(real, monkeypatch):
+    _needs_wordnet()
+    for spelling in ("checked", "strict"):                        # "strict": the old spelling, still read
+        monkeypatch.setenv("MORPHOSIM_GROUNDING", spelling)
+        with pytest.raises(CommandError, match="kangaroo.*Nearest shapes and assets: .+\\(0\\.\\d\\d\\)"):
+            parse("a kangaroo")
+        assert parse("an eagle").objects[0].category == "bird"       # a kind of bird (WordNet)
+        assert parse("a kitten").objects[0].category == "cat"        # very similar (0.77)
     monkeypatch.setenv("MORPHOSIM_GROUNDING", "loose")
     with pytest.raises(ValueError, match="MORPHOSIM_GROUNDING"):
         parse("a tiger")
+    with pytest.raises(ValueError, match="grounding"):
+        parse("a tiger", grounding="loose")
+
+
+def test_kind_level_stands_in_with_the_same_kind(real, monkeypatch):
+    _needs_wordnet()
+    from morphosim_gym.language.hypernyms import shared_kind
+    from morphosim_gym.language.substitutions import SubstitutionWarning, plan_substitutions
+
+    monkeypatch.delenv("MORPHOSIM_GROUNDING", raising=False)
+    o = parse("a kangaroo").objects[0]                              # "kind" is the default
+    assert o.grounding == "kind" and o.category != "duck"
+    text = o.category if not o.category.startswith("asset:") else None
+    assert shared_kind("kangaroo", text=None if text else _asset_name(o.category), category=text) is not None
+    [sub] = plan_substitutions(parse("a kangaroo"))
+    assert sub.kind == "stand-in" and sub.asked == "kangaroo"
+    with pytest.warns(SubstitutionWarning, match="kangaroo.*stand-in of the same kind"):
+        import morphosim_gym as ms
+        ms.MorphoSim(reconstruction="oracle").parse("a kangaroo")
+    with pytest.raises(CommandError, match="florbnax.*Nearest shapes and assets"):
+        parse("a florbnax")                                          # WordNet knows no kind: refused
+    nearest = parse("a kangaroo", grounding="nearest").objects[0]
+    assert nearest.grounding in ("embedding", "open")                # the old default, by similarity only
+
+
+def _asset_name(category: str) -> str:
+    from morphosim_gym.generate.real_assets import asset_index
+    return asset_index().get(category[len("asset:"):]).name
+
+
+def test_zero_ad_animals_resolve_by_name(real):
+    from morphosim_gym.assets.sources import ZeroADSource
+    if ZeroADSource.discover() is None:
+        pytest.skip("needs Debian 0ad-data")
+    for noun in ("tiger", "whale", "giraffe", "polar bear"):
+        assert parse(f"a {noun}").objects[0].category.startswith("asset:zero_ad/"), noun

@@ -7,6 +7,7 @@ import pytest
 
 import morphosim_gym as ms
 from morphosim_gym.cli import main
+from morphosim_gym.language import wordnet
 from morphosim_gym.language.substitutions import SubstitutionWarning, describe, plan_substitutions
 
 TINY = ms.GenerationConfig(width=32, height=32, num_frames=2, detail=0.2)
@@ -15,7 +16,8 @@ TINY = ms.GenerationConfig(width=32, height=32, num_frames=2, detail=0.2)
 def test_a_noun_outside_the_library_is_a_listed_substitution():
     plan = ms.parse("a kangaroo hops from left to right")
     subs = plan_substitutions(plan)
-    assert [(s.kind, s.asked, s.used) for s in subs] == [("noun", "kangaroo", plan.objects[0].category)]
+    kind = "stand-in" if wordnet.available() else "noun"      # WordNet: a thing of the same kind (a mammal)
+    assert [(s.kind, s.asked, s.used) for s in subs] == [(kind, "kangaroo", plan.objects[0].category)]
     assert describe(subs[0]).startswith("noun 'kangaroo' is not in the library: using ")
     assert plan_substitutions(ms.parse("a red ball rolls left")) == ()
 
@@ -73,3 +75,17 @@ def test_cli_generate_prints_the_substitution_and_strict_fails(tmp_path, capsys)
     assert "morphosim generate: note: noun 'kangaroo' is not in the library" in capsys.readouterr().err
     assert main(args + ["--out", str(tmp_path / "b"), "--strict"]) == 2
     assert not (tmp_path / "b").exists()
+
+
+def test_grounding_exact_is_the_one_setting_strict_is_its_old_spelling(capsys):
+    for kwargs in ({"grounding": "exact"}, {"strict": True}):
+        with pytest.raises(ms.CommandError, match="exact.*noun 'kangaroo' is not in the library"):
+            ms.parse("a kangaroo hops from left to right", **kwargs)
+        sim = ms.MorphoSim(generation=TINY, reconstruction="oracle", **kwargs)
+        with pytest.raises(ms.CommandError, match="kangaroo"):
+            sim.generate("a kangaroo hops from left to right", seed=0)
+    with pytest.raises(ValueError, match="grounding"):
+        ms.SimConfig(grounding="sloppy")
+    assert main(["parse", "--grounding", "exact", "a kangaroo hops from left to right"]) == 2
+    assert "exact" in capsys.readouterr().err
+    assert main(["parse", "--compact", "--grounding", "nearest", "a red ball rolls left"]) == 0

@@ -1,7 +1,7 @@
 """Asset sources, found at run time: each is skipped when it is not installed.
 
 `default_sources()` lists what this machine has: Sweet Home 3D furniture catalogues, robosuite's
-objects, Blender's sky panoramas, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
+objects, Blender's sky panoramas, 0 A.D.'s animals and props, LIBERO's groceries and kitchenware, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
 """
 
 from __future__ import annotations
@@ -11,18 +11,22 @@ from collections.abc import Callable, Sequence
 
 from .base import AssetSource, FileStat
 from .folder import FolderSource, folders_from_env
+from .libero import LiberoSource
 from .robosuite import RobosuiteSource
 from .studiolights import StudioLightsSource
 from .sweethome3d import SweetHome3DSource
+from .zero_ad import ZeroADSource
 
 __all__ = [
     "SYSTEM_SOURCES",
     "AssetSource",
     "FileStat",
     "FolderSource",
+    "LiberoSource",
     "RobosuiteSource",
     "StudioLightsSource",
     "SweetHome3DSource",
+    "ZeroADSource",
     "default_sources",
 ]
 
@@ -31,6 +35,8 @@ SYSTEM_SOURCES: dict[str, Callable[[], AssetSource | None]] = {
     SweetHome3DSource.name: SweetHome3DSource.discover,
     RobosuiteSource.name: RobosuiteSource.discover,
     StudioLightsSource.name: StudioLightsSource.discover,
+    ZeroADSource.name: ZeroADSource.discover,
+    LiberoSource.name: LiberoSource.discover,
 }
 
 
