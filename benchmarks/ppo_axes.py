@@ -3,7 +3,7 @@
     python examples/train_ppo_track.py --timesteps T --budget-min 999 --out DIR_A
     python examples/train_ppo_track.py --randomize track --timesteps T --budget-min 999 --out DIR_B
     python benchmarks/ppo_axes.py --baseline DIR_A/ppo_track_model.zip \\
-        --randomized DIR_B/ppo_track_randomized_model.zip --episodes 16
+        --randomized DIR_B/ppo_track_randomized_model.zip --episodes 32
 
 What it runs: `morphosim bench`'s runner on `tasks/suites/axes_track.yaml` (every axis of
 `tasks/axes.py`, each paired with the base episode of the same seed), once per policy, both with
@@ -185,7 +185,7 @@ def main() -> None:
     ap.add_argument("--baseline", type=Path, required=True, help="the model trained without randomisation (.zip)")
     ap.add_argument("--randomized", type=Path, required=True, help="the model trained with randomisation (.zip)")
     ap.add_argument("--randomization", default="track", help="the randomisation the second model was trained with")
-    ap.add_argument("--episodes", type=int, default=16, help="episode seeds per axis")
+    ap.add_argument("--episodes", type=int, default=32, help="episode seeds per axis")
     ap.add_argument("--seed", type=int, default=0, help="first episode seed")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--axes", nargs="*", default=None, help="only these axes (default: every axis of the suite)")
