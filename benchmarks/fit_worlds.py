@@ -16,10 +16,19 @@ time serial vs parallel.
 
 Both worlds use the same smaller clips (`--frames` frames of `--size` px, detail 0.35; the
 suite's own clips are 49 frames of 128 px) so the fits fit the time budget; the env observes
-`--size` px. The fits use the priors a procedural clip carries (`priors="auto"`: the generator's
+`--obs-size` px (default `--size`). The fits use the priors a procedural clip carries (`priors="auto"`: the generator's
 rendered depth, masks and tracks, i.e. ground-truth priors, reported as such in the JSON);
 `--priors estimated` estimates them from the frames instead. The oracle policy reads the target
 position from the world it runs in (in a fit world: the fitted Gaussians of the target).
+
+A saved SB3 policy (`--ppo MODEL.zip`, from examples/train_ppo_track.py) runs as the policy
+`morphosim_gym.policies.sb3:policy_from_env` (shown as "ppo"); it needs the env at its training
+size (`--obs-size 64`). Its episodes are 30 steps here (25-frame clips), half the 60 of its training
+episodes. `--cache DIR` keeps the generated clips and fits between runs (default: a temporary folder),
+and `--keep-rows` keeps the rows of other policies already in `--out` (with their own settings).
+
+    python benchmarks/fit_worlds.py --episodes 12 --skip-pool --obs-size 64 --policies \
+        --ppo DIR/ppo_track_model.zip --keep-rows --cache .cache/fit_worlds
 """
 
 from __future__ import annotations
@@ -35,6 +44,8 @@ from pathlib import Path
 
 
 RESULTS = Path(__file__).resolve().parent / "results"
+PPO_SPEC = "morphosim_gym.policies.sb3:policy_from_env"
+SHOWN = {PPO_SPEC: "ppo"}                      # policy spec -> the name in the table and the rows
 
 
 def _suite(args: argparse.Namespace, world: dict):
@@ -42,7 +53,8 @@ def _suite(args: argparse.Namespace, world: dict):
 
     suite = load_suite("track")
     keep = [p for p in suite.perturbations if p.name in args.conditions]
-    return replace(suite, perturbations=tuple(keep), env_kwargs={"width": args.size, "height": args.size},
+    size = args.obs_size or args.size
+    return replace(suite, perturbations=tuple(keep), env_kwargs={"width": size, "height": size},
                    frames=0, episodes=args.episodes).with_world(**world)
 
 
@@ -102,7 +114,7 @@ def gap(worlds: dict[str, dict], conditions: list[str], policies: list[str]) -> 
     for policy, cond in ((p, c) for p in policies for c in conditions):
         by = {w: {r["seed"]: r for r in worlds[w]["records"]
                   if r["policy"] == policy and r["perturbation"] == cond and r["status"] == "ok"} for w in worlds}
-        row: dict = {"policy": policy, "condition": cond}
+        row: dict = {"policy": SHOWN.get(policy, policy), "condition": cond}
         for w, recs in by.items():
             row[w] = {"success": bootstrap_mean([float(r["success"]) for r in recs.values()]).as_dict(),
                       "return": bootstrap_mean([float(r["return"]) for r in recs.values()]).as_dict()}
@@ -119,6 +131,25 @@ def _fmt(i: dict, pct: bool = False) -> str:
     k = 100.0 if pct else 1.0
     return f"{i['mean'] * k:.0f}% [{i['low'] * k:.0f}, {i['high'] * k:.0f}]" if pct else \
         f"{i['mean']:.1f} [{i['low']:.1f}, {i['high']:.1f}]"
+
+
+def _run_name(args: argparse.Namespace) -> str:
+    """The sweep folder of these settings (the runner refuses to resume another suite's folder)."""
+    return f"obs{args.obs_size or args.size}_" + "_".join(sorted(SHOWN.get(p, p) for p in args.policies))
+
+
+def _merge(out: Path, result: dict) -> dict:
+    """`result` with the rows of the other policies of an earlier `out` (their run kept under `earlier_runs`)."""
+    if not out.is_file():
+        return result
+    old = json.loads(out.read_text())
+    mine = {r["policy"] for r in result["gap"]}
+    kept = [dict(r, run=r.get("run", "earlier")) for r in old.get("gap", []) if r["policy"] not in mine]
+    earlier = old.pop("earlier_runs", [])
+    old.pop("gap", None)
+    if kept:
+        earlier = earlier + [old]
+    return dict(result, gap=kept + [dict(r, run="this") for r in result["gap"]], earlier_runs=earlier)
 
 
 def table(rows: list[dict]) -> str:
@@ -144,26 +175,40 @@ def main() -> None:
                    help="reconstruction priors: the clip's (ground truth for procedural clips) or estimated")
     p.add_argument("--conditions", nargs="*", default=["recolor_target", "remove_distractor", "camera_shift"],
                    help="Track-suite perturbations besides the base")
-    p.add_argument("--policies", nargs="+", default=["oracle", "color"],
+    p.add_argument("--policies", nargs="*", default=["oracle", "color"],
                    help="policy specs (morphosim_gym.policies): oracle reads the world's target position, color "
                         "finds the target's colour in the image")
     p.add_argument("--skip-pool", action="store_true", help="skip the serial-vs-parallel build")
+    p.add_argument("--obs-size", type=int, default=None, help="observation size, pixels (default: --size)")
+    p.add_argument("--ppo", default=None, metavar="MODEL.zip",
+                   help="also run this saved SB3 policy (examples/train_ppo_track.py) as 'ppo'")
+    p.add_argument("--cache", default=None, help="keep clips and fits in this folder (default: a temporary one)")
+    p.add_argument("--keep-rows", action="store_true",
+                   help="keep the rows of other policies already in --out (and their run's settings)")
     p.add_argument("--out", default=str(RESULTS / "fit_worlds.json"))
     args = p.parse_args()
     os.environ.setdefault("MORPHOSIM_ASSET_SOURCES", "")      # the procedural generator, as the test suite
+    if args.ppo:
+        os.environ["MORPHOSIM_SB3_POLICY"] = str(Path(args.ppo).resolve())   # read by policy_from_env (workers too)
+        args.policies = list(args.policies) + [PPO_SPEC]
+    if not args.policies:
+        p.error("expected at least one policy (--policies or --ppo)")
     start = time.perf_counter()
     worlds = _worlds(args)
     with tempfile.TemporaryDirectory(prefix="fit_worlds_") as tmp:
-        root = Path(tmp)
+        root = Path(args.cache) if args.cache else Path(tmp)
         pool = None if args.skip_pool else pool_timing(args, worlds["fit"], root / "pool")
         cache = root / "pool" / "parallel"                    # the parallel pool's fits are reused
-        runs = {name: sweep(args, name, w, cache, root / "out") for name, w in worlds.items()}
+        runs = {name: sweep(args, name, w, cache, root / "out" / _run_name(args)) for name, w in worlds.items()}
     rows = gap(runs, ["base"] + list(args.conditions), list(args.policies))
     worlds_json = {k: {kk: (vv if isinstance(vv, (str, dict)) else repr(vv)) for kk, vv in v.items()}
                    for k, v in worlds.items()}
     result = {"machine": f"{platform.machine()}, {os.cpu_count()} cores, shared with other jobs (loaded)",
               "load_avg_start": os.getloadavg()[0], "settings": vars(args), "worlds": worlds_json,
               "pool_build": pool, "gap": rows, "sweeps": runs, "total_s": round(time.perf_counter() - start, 1)}
+    if args.keep_rows:
+        result = _merge(Path(args.out), result)
+        rows = result["gap"]
     print(table(rows))
     if pool:
         print(f"\npool build of {pool['scenes']} fit scenes: serial {pool['serial_s']} s, {pool['workers']} workers "

@@ -23,7 +23,7 @@ from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
 from morphosim_gym.tasks.spec import SceneRequest
 
 from .config import RENDER_MODES, EnvConfig, env_signature, make_sim, render_backend_of
-from .edits import apply_edit, view_camera_option
+from .edits import apply_edit, view_camera_option, view_change
 from .options import ResetOptions
 from .scene_file import load_fixed_scene
 from .scenes import SceneChooser, SceneSource
@@ -175,6 +175,9 @@ class MorphoSimEnv(gym.Env):
         new = self._edit(before, text, self._episode.get("edit_policy", self.config.on_edit_error))
         if new is before:
             return False
+        view = view_change(before, new)
+        if view is not None:                       # a camera edit: the task moves its camera as the edit says
+            self._task.change_view(world, self._rig, *view)
         world.set_scene(new)
         return True
 

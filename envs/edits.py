@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from typing import Any, Mapping, Optional
 
+import numpy as np
+
 from morphosim_gym.errors import CommandError, EditError
 from morphosim_gym.scene import Scene4D
 
-__all__ = ["apply_edit", "view_camera_option"]
+__all__ = ["apply_edit", "view_camera_option", "view_change"]
 
 
 def apply_edit(sim: Any, scene: Scene4D, text: str, policy: str) -> tuple[Scene4D, Optional[str]]:
@@ -41,3 +43,16 @@ def view_camera_option(before: Scene4D, after: Scene4D, camera: Mapping[str, Any
     if "fov_y_deg" not in out and default_fov is not None and abs(ratio - 1.0) > 1e-9:
         out["fov_y_deg"] = float(min(max(default_fov * ratio, 1.0), 170.0))
     return out
+
+
+def view_change(before: Scene4D, after: Scene4D) -> Optional[tuple[float, np.ndarray]]:
+    """What an edit did to the scene's generation camera, as (field-of-view ratio, position shift [3]),
+    or None when it left the camera as it was (every edit but the view edits)."""
+    a, b = before.camera, after.camera
+    if a is b:
+        return None
+    ratio = b.fov_y_deg / a.fov_y_deg
+    shift = np.asarray(b.position, dtype=np.float64) - np.asarray(a.position, dtype=np.float64)
+    if ratio == 1.0 and not np.any(shift):
+        return None
+    return ratio, shift

@@ -18,8 +18,19 @@ What it does:
     seeds; both run as policy factories `factory(env, seed) -> act(obs, info)`, the protocol of
     `morphosim bench` and `morphosim view`; success = the task's episode-level success (target centred on >= 70% of
     the steps) at the end of the episode;
-  * writes examples/results/ppo_track.json (settings, wall times, success rates, returns)
-    and examples/results/ppo_track_curve.png (learning curve with the random baseline).
+  * writes <out>/ppo_track.json (settings, wall times, success rates, returns) and
+    <out>/ppo_track_curve.png (learning curve with the random baseline); with `--randomize` the
+    files are ppo_track_randomized*; `--stem` names them otherwise;
+  * saves the trained policy as <out>/<stem>_model.zip (SB3 `model.save`) with the observation
+    settings beside it (<stem>_model.json: 64 px rgb, frame stack, zero padding), which
+    `morphosim_gym.policies.sb3.sb3_policy(path)` turns back into a policy factory for
+    `morphosim bench` (`benchmarks/ppo_axes.py` compares two of them on every axis);
+    `--save-every N` also saves checkpoints every N steps.
+
+The measured pair (README, "PPO trained with against without randomisation"):
+
+    python examples/train_ppo_track.py --timesteps 100000 --budget-min 999 --threads 1 --out DIR_A
+    python examples/train_ppo_track.py --randomize track --timesteps 100000 --budget-min 999 --threads 1 --out DIR_B
 """
 
 from __future__ import annotations
@@ -99,7 +110,15 @@ def main() -> None:
     ap.add_argument("--replot", action="store_true", help="only redraw the plot from saved results")
     ap.add_argument("--randomize", default=None, metavar="NAME",
                     help="train under axis randomisation (a tasks/randomization name such as 'track', or a YAML path)")
+    ap.add_argument("--threads", type=int, default=None, help="torch threads (default: all CPU cores)")
+    ap.add_argument("--stem", default=None,
+                    help="output file stem (default: ppo_track, or ppo_track_randomized with --randomize)")
+    ap.add_argument("--save-every", type=int, default=0, metavar="STEPS",
+                    help="also save the policy every STEPS env steps (a multiple of n_envs*128), as "
+                         "<stem>_model_<steps>.zip; the learning rate and clip range are constant, so such a "
+                         "checkpoint equals the policy of a run with --timesteps STEPS")
     args = ap.parse_args()
+    args.stem = args.stem or ("ppo_track_randomized" if args.randomize else "ppo_track")
     if args.replot:
         replot(args.out)
         return
@@ -113,7 +132,7 @@ def main() -> None:
         raise SystemExit("Expected stable-baselines3 for this example, found it missing; "
                          "pip install 'morphosim-gym[train]'") from exc
 
-    torch.set_num_threads(max(1, os.cpu_count() or 1))
+    torch.set_num_threads(args.threads or max(1, os.cpu_count() or 1))
     args.out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
 
@@ -143,6 +162,11 @@ def main() -> None:
                                   "wall_s": round(time.perf_counter() - self.t0, 1)})
             return time.perf_counter() - self.t0 < self.budget_s
 
+        def _on_rollout_start(self) -> None:   # after the previous update: a run's state at num_timesteps
+            n = int(self.num_timesteps)
+            if args.save_every and n and n % args.save_every == 0:
+                save_policy(self.model, args, suffix=f"_{n}")
+
         def _on_rollout_end(self) -> None:
             recent = curve[-32:]
             if recent:
@@ -160,6 +184,8 @@ def main() -> None:
     trained_steps = int(model.num_timesteps)
     venv.close()
     print(f"trained {trained_steps} steps in {train_s:.0f}s", flush=True)
+    model_path = save_policy(model, args)
+    print(f"saved the policy to {model_path}", flush=True)
 
     t_eval = time.perf_counter()
     def trained_policy(env, seed):
@@ -188,10 +214,29 @@ def main() -> None:
         "machine": f"{os.cpu_count()} CPU cores, torch {torch.__version__}",
         "loadavg_at_end": [round(x, 2) for x in os.getloadavg()],
     }
-    (args.out / "ppo_track.json").write_text(json.dumps(result, indent=2) + "\n")
-    (args.out / "ppo_track_curve.json").write_text(json.dumps(curve) + "\n")
-    plot(curve, random, trained, args.out / "ppo_track_curve.png")
-    print(f"wrote {args.out / 'ppo_track.json'} and {args.out / 'ppo_track_curve.png'}")
+    result["model"] = {"zip": model_path.name, "settings": model_path.with_suffix(".json").name}
+    (args.out / f"{args.stem}.json").write_text(json.dumps(result, indent=2) + "\n")
+    (args.out / f"{args.stem}_curve.json").write_text(json.dumps(curve) + "\n")
+    plot(curve, random, trained, args.out / f"{args.stem}_curve.png")
+    print(f"wrote {args.out / (args.stem + '.json')} and {args.out / (args.stem + '_curve.png')}")
+
+
+def policy_settings(args) -> dict:
+    """What `morphosim_gym.policies.sb3` needs to rebuild the policy's observations exactly."""
+    return {"format": "morphosim-sb3-policy/1", "algo": "PPO", "env_id": "MorphoSim/Track-v0",
+            "width": args.size, "height": args.size, "observation": "rgb",
+            "frame_stack": args.frame_stack, "frame_stack_padding": "zero", "deterministic": True,
+            "randomize": args.randomize, "seed": args.seed, "timesteps_requested": args.timesteps,
+            "train_scenes": {"scene_pool": args.pool, "pool_seed": 0}}
+
+
+def save_policy(model, args, suffix: str = "") -> Path:
+    """Save the SB3 model as <out>/<stem>_model<suffix>.zip with its observation settings next to it (.json)."""
+    path = args.out / f"{args.stem}_model{suffix}.zip"
+    model.save(path)
+    settings = {**policy_settings(args), "timesteps_trained": int(model.num_timesteps)}
+    path.with_suffix(".json").write_text(json.dumps(settings, indent=2) + "\n")
+    return path
 
 
 def plot(curve: list[dict], random: dict, trained: dict, path: Path) -> None:
@@ -240,9 +285,11 @@ def plot(curve: list[dict], random: dict, trained: dict, path: Path) -> None:
 
 def replot(out: Path) -> None:
     """Redraw the plot from the saved results (no training)."""
-    result = json.loads((out / "ppo_track.json").read_text())
-    curve = json.loads((out / "ppo_track_curve.json").read_text())
-    plot(curve, result["random"], result["trained"], out / "ppo_track_curve.png")
+    for stem in ("ppo_track", "ppo_track_randomized"):
+        if (out / f"{stem}.json").exists():
+            result = json.loads((out / f"{stem}.json").read_text())
+            curve = json.loads((out / f"{stem}_curve.json").read_text())
+            plot(curve, result["random"], result["trained"], out / f"{stem}_curve.png")
 
 
 if __name__ == "__main__":

@@ -5,8 +5,9 @@
     axis_edits(AXES["target_size"], values)                # ("make the red ball twice as big",)
 
 Every axis is a language edit (`MorphoSim.edit` sentences), so each works at reset
-(`options={"edits": [...]}`) and mid-episode (`LanguagePerturbation`); `camera_shift` is the one
-axis that moves the rig's start view instead (the reset `camera` option). Template fields:
+(`options={"edits": [...]}`) and mid-episode (`LanguagePerturbation`); the field-of-view and
+camera-height edits move the task's camera mid-episode too (`Task.change_view`). `camera_shift` is
+the one axis that moves the rig's start view instead (the reset `camera` option, reset only). Template fields:
 `{target}` ("red ball"), `{target_noun}`, `{target_color}`, `{distractor}` (the first other
 object, "blue cube"), `{distractor_noun}`, `{new_color}` (a colour no object has), `{ground}` (the
 first background object's name), `{swap_noun}` (a shape the target is not). An axis whose field the

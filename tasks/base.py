@@ -186,6 +186,13 @@ class Task:
         """Place the rig relative to the scene and draw its start state (all randomness from `rng`)."""
         raise NotImplementedError
 
+    def change_view(self, world: Any, rig: Any, fov_ratio: float, shift: np.ndarray) -> None:
+        """Follow a mid-episode edit of the scene's generation camera ("widen the field of view",
+        "raise the camera by 0.5 metres"): scale the observing camera's field of view by `fov_ratio`
+        and move it by `shift` (metres, world frame). A task without it refuses such edits."""
+        raise ValueError(f"Expected a task that follows mid-episode camera edits, found {type(self).__name__} "
+                         f"without change_view (apply the edit at reset instead)")
+
     def measure(self, world: Any, rig: Any, view: TaskView) -> dict[str, Any]:
         """Task measurements of the current state, from the world, the rig and the view the env
         just rendered (no reward, no bookkeeping)."""

@@ -108,6 +108,16 @@ class FindTask(Task):
         self._held = 0
         self._found = False
 
+    def change_view(self, world: Any, rig: FreeCameraRig, fov_ratio: float, shift: np.ndarray) -> None:
+        """The free camera moves by `shift` (orientation kept, within its bounds); its field of view
+        scales (clipped to (1, 170) degrees)."""
+        if np.any(shift):
+            rig.data.qpos[:3] = np.clip(rig.data.qpos[:3] + np.asarray(shift, dtype=np.float64), *rig.bounds)
+        if fov_ratio != 1.0:
+            fov = rig.camera("eye", 16, 16).fov_y_deg
+            rig.set_camera_fov("eye", float(np.clip(fov * fov_ratio, 1.0, 170.0)))
+        rig.forward()
+
     def measure(self, world: Any, rig: FreeCameraRig, view: TaskView) -> dict[str, Any]:
         p = self.params
         target = world.target_position(view.t)

@@ -113,6 +113,15 @@ class ReachTask(Task):
         rig.set_world_camera("scene", Camera.look_at(eye, look, 16, 16, fov))
         rig.forward()
 
+    def change_view(self, world: Any, rig: ArmRig, fov_ratio: float, shift: np.ndarray) -> None:
+        """The third-person camera moves by `shift` (looking the same way); its field of view scales
+        (clipped to (1, 170) degrees)."""
+        cam = rig.camera("scene", 16, 16)
+        eye = cam.position + np.asarray(shift, dtype=np.float64)
+        fov = float(np.clip(cam.fov_y_deg * fov_ratio, 1.0, 170.0))
+        rig.set_world_camera("scene", Camera.look_at(eye, eye + cam.camera_to_world[:3, 2], 16, 16, fov))
+        rig.forward()
+
     def measure(self, world: Any, rig: ArmRig, view: TaskView) -> dict[str, Any]:
         target = world.target_position(view.t)
         ee = rig.end_effector()

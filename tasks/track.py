@@ -84,6 +84,7 @@ class TrackTask(Task):
         eye = camera.get("position", world.generation_camera.position)
         fov = camera.get("fov_y_deg", p["fov_y_deg"])
         rig.place(eye, world.focus, ground_z=world.ground_z, fov_deg=fov)
+        self._eye = np.asarray(eye, dtype=np.float64).copy()
         half = math.radians(rig.fov) / 2
         offset = rng.uniform(-1.0, 1.0, 2) * p["init_offset"] * half
         aim = camera.get("look_at")
@@ -96,6 +97,18 @@ class TrackTask(Task):
         rig.aim_at(aim, offset)
         self._steps = 0
         self._centred = 0
+
+    def change_view(self, world: Any, rig: PanTiltRig, fov_ratio: float, shift: np.ndarray) -> None:
+        """The tripod moves with the generation camera (pan and tilt kept, pan 0 still facing the
+        scene's focus, feet on the ground); the zoom's field of view scales (within the rig's range)."""
+        if np.any(shift):
+            q, fov = rig.qpos.copy(), rig.fov
+            self._eye = self._eye + np.asarray(shift, dtype=np.float64)
+            rig.place(self._eye, world.focus, ground_z=world.ground_z, fov_deg=fov)
+            rig.set_joints(q)
+        if fov_ratio != 1.0:
+            rig.set_fov(rig.fov * fov_ratio)
+        rig.forward()
 
     def measure(self, world: Any, rig: PanTiltRig, view: TaskView) -> dict[str, Any]:
         p = self.params
