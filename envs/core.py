@@ -19,7 +19,7 @@ import numpy as np
 from morphosim_gym.render.api import render as render_scene
 from morphosim_gym.rig import AGENT_OBJECT_ID
 from morphosim_gym.scene import Scene4D
-from morphosim_gym.tasks import Task, TaskView, describe_object, make_task
+from morphosim_gym.tasks import Task, TaskView, check_camera_override, describe_object, make_task
 from morphosim_gym.tasks.spec import SceneRequest
 
 from .config import RENDER_MODES, EnvConfig, env_signature, make_sim, render_backend_of
@@ -180,6 +180,22 @@ class MorphoSimEnv(gym.Env):
             self._task.change_view(world, self._rig, *view)
         world.set_scene(new)
         return True
+
+    def move_camera(self, camera: Mapping[str, Any]) -> None:
+        """Move the task's camera now, mid-episode, as the reset `camera` option would have placed it:
+        by the offset from the scene's generation camera to `camera["position"]`, and to the field of
+        view `camera["fov_y_deg"]` relative to the generation camera's (keys as the reset option's;
+        `look_at` is a reset-only key). The next observation shows it; the scene is untouched."""
+        checked = check_camera_override(camera)
+        if "look_at" in checked:
+            raise ValueError("Expected a mid-episode camera move without 'look_at' (a reset-only key), found it")
+        if not checked:
+            raise ValueError(f"Expected a camera move with 'position' and/or 'fov_y_deg', found {camera!r}")
+        generation = self.world.scene.camera
+        ratio = checked.get("fov_y_deg", generation.fov_y_deg) / generation.fov_y_deg
+        shift = checked.get("position", np.asarray(generation.position, dtype=np.float64)) - np.asarray(
+            generation.position, dtype=np.float64)
+        self._task.change_view(self.world, self._rig, float(ratio), shift)
 
     # ================================================================== branching
     def snapshot(self) -> EnvSnapshot:

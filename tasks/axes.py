@@ -7,7 +7,8 @@
 Every axis is a language edit (`MorphoSim.edit` sentences), so each works at reset
 (`options={"edits": [...]}`) and mid-episode (`LanguagePerturbation`); the field-of-view and
 camera-height edits move the task's camera mid-episode too (`Task.change_view`). `camera_shift` is
-the one axis that moves the rig's start view instead (the reset `camera` option, reset only). Template fields:
+the one axis that moves the rig's view by a camera shift instead (the reset `camera` option at `at: 0`;
+`MorphoSimEnv.move_camera` before step k for `at: k`). Template fields:
 `{target}` ("red ball"), `{target_noun}`, `{target_color}`, `{distractor}` (the first other
 object, "blue cube"), `{distractor_noun}`, `{new_color}` (a colour no object has), `{ground}` (the
 first background object's name), `{swap_noun}` (a shape the target is not). An axis whose field the

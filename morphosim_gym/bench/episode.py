@@ -232,7 +232,7 @@ class EpisodeRunner:
             raise _Failure("perturbation", _text(exc)) from None
         record.update(edits=list(edits), camera=camera or None)
         options: dict[str, Any] = {"prompt": ep.request.prompt, "scene_seed": ep.scene_seed,
-                                   "target": ep.request.target or None, "camera": camera}
+                                   "target": ep.request.target or None, "camera": camera if pert.at == 0 else {}}
         try:
             env = LanguagePerturbation(SensorEffects(env),                             # the one edit scheduler
                                        schedule={pert.at: edits} if edits else {})
@@ -246,10 +246,13 @@ class EpisodeRunner:
             act = policy_for_episode(key.policy, env, key.seed)
         except Exception as exc:
             raise _Failure("policy", f"the policy factory raised {_text(exc)}") from None
-        return self._loop(env, act, obs, info, pert.at, edits, frames, record, log)
+        move = camera if pert.at > 0 else {}
+        return self._loop(env, act, obs, info, pert.at, edits, frames, record, log, move)
 
     def _loop(self, env: LanguagePerturbation, act: Any, obs: Any, info: dict, at: int, edits: tuple[str, ...],
-              frames: int, record: dict, log: _NoLog) -> Optional[np.ndarray]:
+              frames: int, record: dict, log: _NoLog, move: Optional[dict] = None) -> Optional[np.ndarray]:
+        """Run the episode to its end; `move` (a camera shift due at step `at`) moves the task's camera
+        just before that step, as the wrapper applies the edits due then."""
         u = env.unwrapped
         horizon = max(int(round(u.world.duration / u.dt)), 1)
         keep = sorted(set(np.round(np.linspace(0, horizon, frames)).astype(int).tolist())) if frames else []
@@ -264,6 +267,11 @@ class EpisodeRunner:
             a = _check_action(action, space.shape, step)
             log.add(obs, info, a, space.low, space.high)
             step += 1
+            if move and step == at:
+                try:
+                    u.move_camera(move)
+                except ValueError as exc:
+                    raise _Failure("perturbation", f"{_text(exc)} (before step {step})") from None
             try:
                 obs, reward, terminated, truncated, info = env.step(a)      # the wrapper applies the edits due
             except ValueError as exc:

@@ -21,7 +21,7 @@ perturbations:
     edits: ["reverse the motion of the {target}"]
     at: 20                                        # before the 20th step (0 = at reset, the default)
   - name: camera_shift
-    camera: {orbit_deg: 25}                       # the env's reset camera option, relative to the scene
+    camera: {orbit_deg: 25}                       # relative to the scene: the reset camera option (at: k moves it before step k)
   - axis: target_size                             # an axis of the registry (`tasks.axes.AXES`); keys given
     at: 10                                        # here (name, edits, at, camera) override the axis's
 axes: all                                         # optional: one perturbation per registry axis (or a list
@@ -77,7 +77,8 @@ class SuiteError(ValueError):
 
 @dataclass(frozen=True)
 class CameraShift:
-    """Move the env's camera relative to the scene's generation camera (the reset `camera` option).
+    """Move the env's camera relative to the scene's generation camera (the reset `camera` option at
+    reset; `MorphoSimEnv.move_camera` mid-episode, by the same offset from the generation camera).
 
     Attributes:
         orbit_deg: yaw about the vertical axis through the scene centre, degrees.
@@ -105,7 +106,7 @@ class Perturbation:
         name: unique within the suite, not "base".
         edits: edit command templates, applied in order.
         at: 0 = at reset (before the first observation); k >= 1 = just before the k-th step.
-        camera: a camera shift at reset, or None.
+        camera: a camera shift (at reset for at: 0, else just before the at-th step), or None.
         description: free text.
         error: why the entry is invalid (its episodes are recorded as failed), or None.
     """
@@ -370,8 +371,6 @@ def _check_perturbation(p: Any, index: int, source: str) -> Perturbation:
     if isinstance(at, bool) or not isinstance(at, int) or at < 0:
         raise SuiteError(f"Expected 'at' as a step number >= 0 in {where}, found {at!r}")
     camera = _camera(p["camera"], where) if p.get("camera") is not None else None
-    if camera is not None and at != 0:
-        raise SuiteError(f"Expected a camera shift at reset (at: 0) in {where}, found at: {at}")
     if not edits and camera is None:
         raise SuiteError(f"Expected 'edits' or 'camera' in {where}, found neither")
     return Perturbation(name, tuple(edits), at, camera, str(p.get("description", "")))

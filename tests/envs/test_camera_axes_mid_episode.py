@@ -99,3 +99,54 @@ def test_a_suite_schedules_the_camera_axes_mid_episode(tmp_path):
     assert rec["camera_fov"]["at"] == AT and rec["camera_fov"]["perturbed"]
     assert rec["camera_fov"]["metrics"]["fov_y_deg"] == pytest.approx(1.3 * rec["base"]["metrics"]["fov_y_deg"])
     assert rec["camera_height"]["metrics"] != rec["base"]["metrics"]       # the target moves in the raised view
+
+
+def _zero_steps(env, n):
+    zero = np.zeros(env.action_space.shape, np.float32)
+    return [env.step(zero)[4] for _ in range(n)]
+
+
+def test_move_camera_mid_episode_matches_a_view_edit_of_the_same_offset():
+    plain = make("MorphoSim/Track-v0", prompt=PROMPT)
+    moved = make("MorphoSim/Track-v0", prompt=PROMPT)
+    for env in (plain, moved):
+        env.reset(seed=0)
+        _zero_steps(env, AT - 1)
+    generation = np.asarray(moved.unwrapped.world.scene.camera.position, dtype=np.float64)
+    moved.unwrapped.move_camera({"position": (generation + [0.0, 0.0, 0.5]).tolist()})
+    i0, i1 = _zero_steps(plain, 1)[0], _zero_steps(moved, 1)[0]
+    (c0, f0), (c1, f1) = _pose(i0, "eye"), _pose(i1, "eye")
+    np.testing.assert_allclose(c1[:3, 3], c0[:3, 3] + [0.0, 0.0, 0.5], atol=1e-6)
+    np.testing.assert_allclose(c1[:3, :3], c0[:3, :3], atol=1e-9)
+    assert f1 == f0
+    plain.close()
+    moved.close()
+
+
+def test_move_camera_refuses_bad_moves_and_leaves_the_rig_as_it_was():
+    env = make("MorphoSim/Track-v0", prompt=PROMPT)
+    env.reset(seed=0)
+    before = env.unwrapped.rig.qpos.copy()
+    for bad in ({}, {"look_at": [0, 0, 0]}, {"position": [0, float("nan"), 1]}, {"fov_y_deg": 0}, {"zoom": 2}):
+        with pytest.raises(ValueError, match="camera"):
+            env.unwrapped.move_camera(bad)
+    np.testing.assert_array_equal(env.unwrapped.rig.qpos, before)
+    env.close()
+
+
+def test_a_suite_camera_shift_at_step_k_moves_the_view_from_that_step(tmp_path):
+    from morphosim_gym.bench.episode import EpisodeKey, EpisodeRunner
+    from morphosim_gym.bench.suite import load_suite
+
+    spec = {"name": "orbit_mid", "env": "MorphoSim/Track-v0", "env_kwargs": {"width": 32, "height": 32},
+            "episodes": 1, "frames": 0, "world": {"generation": {"num_frames": 9, "width": 32, "height": 32}},
+            "scenes": {"prompt": "a red {object} moves from left to right", "fields": {"object": ["ball"]},
+                       "target": "object", "target_color": None},
+            "perturbations": [{"name": "orbit_mid", "camera": {"orbit_deg": 25}, "at": AT}]}
+    runner = EpisodeRunner(load_suite(spec), str(tmp_path))
+    base, mid = (runner.run(EpisodeKey("zero", p, 0), frames=100) for p in ("base", "orbit_mid"))   # every step
+    assert mid.record["status"] == "ok" and mid.record["at"] == AT and mid.record["perturbed"]
+    assert mid.record["camera"] and "position" in mid.record["camera"]
+    assert len(base.frames) == len(mid.frames) > AT + 1           # frame k: the observation after k steps
+    for k, (f0, f1) in enumerate(zip(base.frames, mid.frames)):
+        assert np.array_equal(f0, f1) == (k < AT), k
