@@ -10,7 +10,7 @@ from .masks import plan_targets
 from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
 
-__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors"]
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors", "setting_label"]
 
 PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
@@ -21,7 +21,7 @@ def _carried(clip: GeneratedClip) -> str:
     return "ground_truth" if clip.ground_truth is not None else str(clip.info.get("priors") or "clip")
 
 
-def _setting_label(clip: GeneratedClip) -> str:
+def setting_label(clip: GeneratedClip) -> str:
     """The setting's object name: the plan's setting word in its canonical form ("underwater" ->
     "water", the name the generator gives that background), "ground" without one."""
     from ..language.vocabulary import word_to_setting
@@ -52,7 +52,7 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
         return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
-    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=_setting_label(clip))
+    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip))
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:
