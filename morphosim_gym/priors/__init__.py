@@ -13,8 +13,9 @@ from .masks import motion_foreground, plan_targets
 from .prepare import PRIOR_SOURCES, prepare_priors, setting_label
 from .protocol import BoxTrack, PlanTarget, PriorEstimators
 from .rgb import RGBPriorEstimators
+from .sizes import CATEGORY_SIZES, ObjectSize, planned_sizes, size_depth
 from .tracks import flow_tracks
 
-__all__ = ["PRIOR_SOURCES", "BoxTrack", "PlanTarget", "PriorEstimators", "RGBPriorEstimators", "contact_depth",
+__all__ = ["CATEGORY_SIZES", "ObjectSize", "planned_sizes", "size_depth", "PRIOR_SOURCES", "BoxTrack", "PlanTarget", "PriorEstimators", "RGBPriorEstimators", "contact_depth",
            "corrupt_priors", "flow_tracks", "ground_plane_depth", "motion_foreground", "plan_targets",
            "prepare_priors", "setting_label"]

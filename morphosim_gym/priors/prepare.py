@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import replace
 from typing import Any
 
@@ -9,6 +10,7 @@ from ..scene import GeneratedClip
 from .masks import plan_targets
 from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
+from .sizes import planned_sizes
 
 __all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors", "setting_label"]
 
@@ -28,6 +30,17 @@ def setting_label(clip: GeneratedClip) -> str:
 
     s = clip.info.get("setting")
     return (word_to_setting(str(s).lower()) or str(s)) if s else "ground"
+
+
+def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """The keyword arguments of `kwargs` that `method` takes (all of them with a **kwargs)."""
+    try:
+        params = inspect.signature(method).parameters
+    except (TypeError, ValueError):
+        return {}
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return dict(kwargs)
+    return {k: v for k, v in kwargs.items() if k in params}
 
 
 def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorEstimators | None = None) -> GeneratedClip:
@@ -61,7 +74,9 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
         masks, labels = (None, {}) if out is None else out
         fields.update(masks=masks, labels=labels)
     if estimate["depth"]:
-        fields["depth"] = est.depth(clip.frames, clip.cameras, masks=masks)
+        extra = {"labels": labels, "sizes": planned_sizes(clip.info)}
+        accepted = _accepted(est.depth, extra)          # estimators without size priors still work
+        fields["depth"] = est.depth(clip.frames, clip.cameras, masks=masks, **accepted)
     if estimate["tracks"]:
         out = est.tracks(clip.frames)
         fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
