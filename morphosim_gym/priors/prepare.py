@@ -18,9 +18,15 @@ PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
 
 
-def _carried(clip: GeneratedClip) -> str:
-    """What the priors a clip carries are: the generator's renders of its ground truth, or an estimate."""
-    return "ground_truth" if clip.ground_truth is not None else str(clip.info.get("priors") or "clip")
+def _carried(clip: GeneratedClip, name: str = "") -> str:
+    """What prior `name` of a clip is: what its info says (e.g. "corrupted"), else the
+    generator's renders of its ground truth ("ground_truth") or what the clip says it carries."""
+    said = clip.info.get("priors")
+    if isinstance(said, dict) and said.get(name):
+        return str(said[name])
+    if clip.ground_truth is not None:
+        return "ground_truth"
+    return str(said) if said and not isinstance(said, dict) else "clip"
 
 
 def setting_label(clip: GeneratedClip) -> str:
@@ -61,10 +67,10 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
         if missing:
             raise ValueError(f"Expected a clip carrying depth, masks and tracks for priors='ground_truth', "
                              f"missing {missing}")
-        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
-        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
     est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip))
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
@@ -80,7 +86,7 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     if estimate["tracks"]:
         out = est.tracks(clip.frames)
         fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
-    origin = {n: ("estimated" if estimate[n] else _carried(clip)) for n in PRIOR_NAMES}
+    origin = {n: ("estimated" if estimate[n] else _carried(clip, n)) for n in PRIOR_NAMES}
     fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__}
     return replace(clip, **fields)
 
