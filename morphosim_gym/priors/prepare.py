@@ -7,7 +7,7 @@ from dataclasses import replace
 from typing import Any
 
 from ..scene import GeneratedClip
-from .masks import plan_targets
+from .masks import plan_targets, static_plan_labels
 from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
 from .sizes import planned_sizes
@@ -76,7 +76,8 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:
         targets = plan_targets(clip.info, clip.num_frames, clip.width, clip.height)
-        out = est.masks(clip.frames, None, targets, cameras=clip.cameras)
+        extra = _accepted(est.masks, {"static_labels": static_plan_labels(clip.info)})
+        out = est.masks(clip.frames, None, targets, cameras=clip.cameras, **extra)
         masks, labels = (None, {}) if out is None else out
         fields.update(masks=masks, labels=labels)
     if estimate["depth"]:

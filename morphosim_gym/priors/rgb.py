@@ -5,11 +5,12 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from ..scene.camera import Camera
 from .depth import contact_depth, ground_plane_depth
-from .masks import label_regions, motion_foreground
+from .masks import _box_masks, label_regions, motion_foreground, static_regions
 from .protocol import BoxTrack
 from .sizes import ObjectSize, size_depth
 from .tracks import flow_tracks
@@ -25,8 +26,10 @@ class RGBPriorEstimators:
 
     - masks: moving regions (`masks.motion_foreground`) labelled with the plan's moving objects
       (`masks.label_regions`); the other pixels are the setting (id 0, label `setting_label`;
-      above the horizon only with `backdrop`, else -1). Attention maps are not used. Static objects
-      other than the setting are not found (they join the setting).
+      above the horizon only with `backdrop`, else -1). Attention maps are not used. The still
+      objects the plan names (`static_labels`: `masks.static_plan_labels`) are the regions of the
+      setting that stand out from it in colour (`masks.static_regions`); other still things
+      join the setting.
     - depth: the ground plane z = `ground_height` for the setting; each object region gets the
       ground depth where its lowest pixels meet the ground (objects stand on the ground), or,
       given its real size (`sizes`, by label: `sizes.planned_sizes`), the depth at which
@@ -88,6 +91,8 @@ class RGBPriorEstimators:
             if inst <= SETTING_ID:
                 continue
             size = (sizes or {}).get(_base_name((labels or {}).get(int(inst), "")))
+            if size is not None and size.height < 0.2 * size.longest:
+                continue                # flat on the ground (a plate): the ground's own depth
             z = object_depths(masks, int(inst), ground, cams, size, self.lifted_ratio, self.contact_percentile)
             z = np.where(np.isfinite(z), z, fallback)
             for i in range(t):
@@ -95,7 +100,8 @@ class RGBPriorEstimators:
         return out.astype(np.float32)
 
     def masks(self, frames: np.ndarray, attention: np.ndarray | None, targets: Sequence[BoxTrack],
-              cameras: Sequence[Camera] | None = None) -> tuple[np.ndarray, dict[int, str]]:
+              cameras: Sequence[Camera] | None = None, static_labels: Sequence[str] = (),
+              ) -> tuple[np.ndarray, dict[int, str]]:
         f = np.asarray(frames)
         t, h, w = f.shape[:3]
         fg = motion_foreground(f, cameras, targets, self.ground_height, self.box_margin)
@@ -107,6 +113,23 @@ class RGBPriorEstimators:
         else:
             below = np.ones((t, h, w), bool)
         setting = (ids == 0) & below
+        if static_labels:
+            # the still objects the plan names: what stands out from the setting in colour (one
+            # label: every such region; several: the largest regions, one label each)
+            first = len(targets) + 1
+            for i in range(t):
+                # not inside a moving object's planned box: what the motion test missed of it
+                boxed = np.any(_box_masks(targets, i, h, w, 0.0), axis=0) if targets else np.zeros((h, w), bool)
+                odd = static_regions(f[i], setting[i]) & ~boxed
+                n, lab, stats, _ = cv2.connectedComponentsWithStats(odd.astype(np.uint8), connectivity=8)
+                order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
+                for k, c in enumerate(order):
+                    idx = min(k, len(static_labels) - 1) if len(static_labels) == 1 else k
+                    if idx >= len(static_labels):
+                        break
+                    ids[i][lab == c] = first + idx
+                    setting[i][lab == c] = False
+            labels = {**labels, **{first + k: str(n) for k, n in enumerate(static_labels)}}
         ids[ids == 0] = -1
         ids[setting] = SETTING_ID
         if setting.any():
