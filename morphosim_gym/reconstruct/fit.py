@@ -36,6 +36,8 @@ class FitConfig:
         w_depth_invariant: weight of the scale- and shift-invariant depth term
             (`losses.scale_shift_depth_loss`, per instance and frame): the prior's depth shape
             without its per-object scale, which estimated depth gets wrong more than the shape.
+            Not for a depth prior that is the generator's exact render (info["priors"]["depth"]
+            "ground_truth"), fitted as before.
         confidence: weigh mask pixels, depth pixels and tracks by the priors' confidences
             (`priors.prior_confidences`: a mask's outline and jumpy tracks count less; priors that
             are the generator's exact renders keep weight 1).
@@ -178,6 +180,9 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
     gen = torch.Generator().manual_seed(seed)
     order_rng = np.random.default_rng(seed)
     data = ClipTensors(clip, sorted(int(i) for i in np.unique(clip.masks) if i >= 0), confidence=cfg.confidence)
+    # the generator's own depth renders are metric and exact: no scale to be blind to
+    depth_origin = (clip.info.get("priors") or {}).get("depth") if isinstance(clip.info.get("priors"), dict) else None
+    invariant_depth = cfg.w_depth_invariant > 0 and depth_origin != "ground_truth"
     scene_depth = float(np.median(clip.depth[clip.depth > 0]))
     bg = torch.tensor(background, dtype=torch.float32)
     # footprint of each Gaussian (initial pixel size), for densification thresholds
@@ -233,7 +238,7 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         loss = photometric_loss(rgb, target, cfg.w_ssim)
         conf_t = None if data.mask_weight is None else data.mask_weight[t]
         loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha, cfg.depth_trim, weight=conf_t)
-        if cfg.w_depth_invariant > 0:
+        if invariant_depth:
             loss = loss + cfg.w_depth_invariant * scale_shift_depth_loss(depth, data.depth[t], alpha, data.masks[t],
                                                                          weight=conf_t)
         onehot_t = data.onehot(t)
