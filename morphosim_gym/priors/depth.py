@@ -23,10 +23,12 @@ def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: fl
     return np.where(ok, z, 0.0).astype(np.float32)
 
 
-def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked: np.ndarray | None = None) -> float:
+def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked: np.ndarray | None = None,
+                  percentile: float = 50.0) -> float:
     """Camera depth of an object from where its mask [H, W] meets the ground: the ground depth
-    [H, W] under the mask's lowest pixels (the median over its bottom row's columns, taken one
-    pixel below the mask). Columns where the pixel below is `blocked` [H, W] (another object in
+    [H, W] under the mask's lowest pixels (the `percentile` over its bottom row's columns, taken
+    one pixel below the mask: a low one takes the nearest contacts, the feet of a sheep rather
+    than the ground seen under its belly). Columns where the pixel below is `blocked` [H, W] (another object in
     front hides the contact) are left out unless every column is. `fallback` when the mask
     touches no ground (a fish in the water, a bird in the sky) or is empty."""
     rows, cols = np.nonzero(mask)
@@ -43,4 +45,4 @@ def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked
             c, below = c[free], below[free]
     z = ground[below, c]
     z = z[z > 0]
-    return float(np.median(z)) if z.size else float(fallback)
+    return float(np.percentile(z, percentile)) if z.size else float(fallback)

@@ -26,7 +26,8 @@ from ..scene.camera import Camera
 from .depth import ground_plane_depth
 from .protocol import BoxTrack, PlanTarget
 
-__all__ = ["box_contrast", "label_regions", "motion_foreground", "plan_targets", "still_camera"]
+__all__ = ["box_contrast", "label_regions", "motion_foreground", "plan_targets", "static_plan_labels",
+           "static_regions", "still_camera"]
 
 
 def still_camera(cameras: Sequence[Camera]) -> bool:
@@ -196,3 +197,46 @@ def box_contrast(frame: np.ndarray, box: np.ndarray, ring: int = 3, min_colour: 
     f = frame.astype(np.float32)
     ref = np.median(f[band], axis=0)
     return box & (np.abs(f - ref).max(axis=-1) > min_colour)
+
+
+SETTING_DRESSING: dict[str, tuple[str, ...]] = {"underwater": ("seaweed",)}
+"""Setting -> the still objects the procedural generator always dresses it with (its rule: the
+sea floor comes with seaweed), looked for like planned still objects."""
+
+
+def static_plan_labels(info: dict[str, Any]) -> list[str]:
+    """Names of the objects a clip's plan says stay still: planned objects no motion moves
+    (and without a trajectory), plus the setting's dressing (`SETTING_DRESSING`)."""
+    plan = info.get("plan") or {}
+    moving = {str(m.get("target")) for m in plan.get("motions") or [] if m.get("path") != "stop"}
+    moving |= set((info.get("trajectories") or {}).keys())
+    out = [str(o.get("name")) for o in plan.get("objects") or [] if str(o.get("name")) not in moving]
+    for extra in SETTING_DRESSING.get(str(info.get("setting") or ""), ()):
+        if extra not in out and extra not in moving:
+            out.append(extra)
+    return out
+
+
+def static_regions(frame: np.ndarray, setting: np.ndarray, min_colour: float = 45.0, colour_sigmas: float = 4.0,
+                   min_area_frac: float = 0.004) -> np.ndarray:
+    """[H, W] bool: pixels of the setting region `setting` [H, W] of one frame [H, W, 3] that stand
+    out from it in colour: farther than max(`min_colour`, `colour_sigmas` x the setting's spread)
+    from the median colour of the setting's pixels in the same row (a setting's colour changes
+    with distance, row by row, far more than along a row), cleaned into regions of at least
+    `min_area_frac` of the image. What a still object (a plate on the table, seaweed on the sea
+    floor) looks like against the setting it stands on."""
+    h, w = setting.shape
+    f = frame.astype(np.float32)
+    ref = np.full((h, 3), np.nan, np.float32)
+    for r in range(h):
+        if setting[r].sum() >= max(4, w // 8):
+            ref[r] = np.median(f[r][setting[r]], axis=0)
+    rows = np.flatnonzero(np.isfinite(ref[:, 0]))
+    if len(rows) == 0:
+        return np.zeros((h, w), bool)
+    for c in range(3):                      # rows with too little setting: the nearest row's colour
+        ref[:, c] = np.interp(np.arange(h), rows, ref[rows, c])
+    dist = np.abs(f - ref[:, None]).max(axis=-1)
+    spread = float(np.median(np.abs(dist[setting] - np.median(dist[setting])))) * 1.4826
+    odd = setting & (dist > max(min_colour, colour_sigmas * spread))
+    return _clean(odd, max(4, int(min_area_frac * h * w)))

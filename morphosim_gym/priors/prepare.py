@@ -2,32 +2,51 @@
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import replace
 from typing import Any
 
 from ..scene import GeneratedClip
-from .masks import plan_targets
+from .masks import plan_targets, static_plan_labels
 from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
+from .sizes import planned_sizes
 
-__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors"]
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors", "setting_label"]
 
 PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
 
 
-def _carried(clip: GeneratedClip) -> str:
-    """What the priors a clip carries are: the generator's renders of its ground truth, or an estimate."""
-    return "ground_truth" if clip.ground_truth is not None else str(clip.info.get("priors") or "clip")
+def _carried(clip: GeneratedClip, name: str = "") -> str:
+    """What prior `name` of a clip is: what its info says (e.g. "corrupted"), else the
+    generator's renders of its ground truth ("ground_truth") or what the clip says it carries."""
+    said = clip.info.get("priors")
+    if isinstance(said, dict) and said.get(name):
+        return str(said[name])
+    if clip.ground_truth is not None:
+        return "ground_truth"
+    return str(said) if said and not isinstance(said, dict) else "clip"
 
 
-def _setting_label(clip: GeneratedClip) -> str:
+def setting_label(clip: GeneratedClip) -> str:
     """The setting's object name: the plan's setting word in its canonical form ("underwater" ->
     "water", the name the generator gives that background), "ground" without one."""
     from ..language.vocabulary import word_to_setting
 
     s = clip.info.get("setting")
     return (word_to_setting(str(s).lower()) or str(s)) if s else "ground"
+
+
+def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """The keyword arguments of `kwargs` that `method` takes (all of them with a **kwargs)."""
+    try:
+        params = inspect.signature(method).parameters
+    except (TypeError, ValueError):
+        return {}
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return dict(kwargs)
+    return {k: v for k, v in kwargs.items() if k in params}
 
 
 def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorEstimators | None = None) -> GeneratedClip:
@@ -48,24 +67,27 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
         if missing:
             raise ValueError(f"Expected a clip carrying depth, masks and tracks for priors='ground_truth', "
                              f"missing {missing}")
-        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
-        return replace(clip, info={**clip.info, "priors": {n: _carried(clip) for n in PRIOR_NAMES}})
-    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=_setting_label(clip))
+        return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
+    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip))
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:
         targets = plan_targets(clip.info, clip.num_frames, clip.width, clip.height)
-        out = est.masks(clip.frames, None, targets, cameras=clip.cameras)
+        extra = _accepted(est.masks, {"static_labels": static_plan_labels(clip.info)})
+        out = est.masks(clip.frames, None, targets, cameras=clip.cameras, **extra)
         masks, labels = (None, {}) if out is None else out
         fields.update(masks=masks, labels=labels)
     if estimate["depth"]:
-        fields["depth"] = est.depth(clip.frames, clip.cameras, masks=masks)
+        extra = {"labels": labels, "sizes": planned_sizes(clip.info)}
+        accepted = _accepted(est.depth, extra)          # estimators without size priors still work
+        fields["depth"] = est.depth(clip.frames, clip.cameras, masks=masks, **accepted)
     if estimate["tracks"]:
         out = est.tracks(clip.frames)
         fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
-    origin = {n: ("estimated" if estimate[n] else _carried(clip)) for n in PRIOR_NAMES}
+    origin = {n: ("estimated" if estimate[n] else _carried(clip, n)) for n in PRIOR_NAMES}
     fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__}
     return replace(clip, **fields)
 

@@ -41,7 +41,10 @@ class PriorEstimators(Protocol):
     def depth(self, frames: np.ndarray, camera: Camera | Sequence[Camera],
               masks: np.ndarray | None = None) -> np.ndarray | None:
         """frames [T, H, W, 3] uint8, one camera or one per frame, optional [T, H, W] instance
-        masks (-1 background) -> [T, H, W] float32 camera-z depth (0 where unknown)."""
+        masks (-1 background) -> [T, H, W] float32 camera-z depth (0 where unknown).
+        An implementation may also take `labels` ({mask id: label}) and `sizes` ({planned
+        object name: `sizes.ObjectSize`}) keywords; `prepare_priors` passes them only to one
+        that does."""
 
     def masks(self, frames: np.ndarray, attention: np.ndarray | None,
               targets: Sequence[BoxTrack], cameras: Sequence[Camera] | None = None,

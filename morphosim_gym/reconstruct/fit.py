@@ -11,8 +11,9 @@ from tqdm.auto import tqdm
 
 from ..render import rasterize
 from ..scene import GeneratedClip
+from ..priors import prior_confidences
 from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_iou_loss, mask_loss, photometric_loss, psnr_torch,
-                     smooth_motion_loss, track_loss)
+                     scale_shift_depth_loss, smooth_motion_loss, track_loss)
 from .model import DynamicGaussians, rbf_skinning
 from .strategy import Strategy, accumulate, initialize_state, refine
 
@@ -32,6 +33,14 @@ class FitConfig:
         lr_node_trans: node translation learning rate, times the median scene depth.
         lr_node_quats: node rotation learning rate.
         w_ssim, w_depth, w_mask, w_mask_iou, w_empty, w_track, w_arap, w_smooth: loss weights.
+        w_depth_invariant: weight of the scale- and shift-invariant depth term
+            (`losses.scale_shift_depth_loss`, per instance and frame): the prior's depth shape
+            without its per-object scale, which estimated depth gets wrong more than the shape.
+            Not for a depth prior that is the generator's exact render (info["priors"]["depth"]
+            "ground_truth"), fitted as before.
+        confidence: weigh mask pixels, depth pixels and tracks by the priors' confidences
+            (`priors.prior_confidences`: a mask's outline and jumpy tracks count less; priors that
+            are the generator's exact renders keep weight 1).
         depth_trim: fraction of each frame's largest relative depth errors left out of the depth term.
         track_delta: Huber threshold (pixels) of the track term (0: L1).
         lr_decay: the position and node-pose learning rates decay exponentially to this fraction
@@ -59,6 +68,8 @@ class FitConfig:
     w_track: float = 0.05
     w_arap: float = 1.0
     w_smooth: float = 1.0
+    w_depth_invariant: float = 0.05
+    confidence: bool = True
     lr_decay: float = 0.03
     depth_trim: float = 0.1
     track_delta: float = 1.0
@@ -76,7 +87,7 @@ class FitConfig:
 class ClipTensors:
     """A clip's frames and priors as torch tensors, plus per-frame camera arrays."""
 
-    def __init__(self, clip: GeneratedClip, instance_ids: list[int]) -> None:
+    def __init__(self, clip: GeneratedClip, instance_ids: list[int], confidence: bool = False) -> None:
         self.T = clip.num_frames
         self.H, self.W = clip.height, clip.width
         self.rgb = torch.from_numpy(clip.frames.astype(np.float32) / 255.0)
@@ -90,6 +101,10 @@ class ClipTensors:
         self.Ks = torch.from_numpy(np.stack([c.K for c in clip.cameras]).astype(np.float32))
         self.nears = torch.tensor([c.near for c in clip.cameras], dtype=torch.float64)
         self.fx = float(clip.cameras[0].fx)
+        mask_conf, track_conf = prior_confidences(clip) if confidence else (None, None)
+        # per-pixel confidence of the mask prior [T, H, W] (None: all 1), per-track confidence [P]
+        self.mask_weight = None if mask_conf is None else torch.from_numpy(mask_conf)
+        self.track_weight = None if track_conf is None else torch.from_numpy(track_conf)
 
     def onehot(self, frame: int) -> torch.Tensor:
         """[H, W, K] one-hot instance masks (background pixels are all zero)."""
@@ -117,7 +132,8 @@ def _node_pairs(model: DynamicGaussians, k: int = 3) -> torch.Tensor:
 
 def _track_targets(clip: GeneratedClip, model: DynamicGaussians, reference: dict[int, int], dynamic: dict[int, bool]):
     """Canonical 3D points of dynamic-instance tracks (lifted at their reference frame), their
-    skinning, 2D targets [P, T, 2] and visibility [P, T]; None without tracks."""
+    skinning, 2D targets [P, T, 2], visibility [P, T] and the indices [P] of those tracks in the
+    clip; None without tracks."""
     if clip.tracks is None or model.node_centres.shape[0] == 0:
         return None
     pts, nodes_inst, keep = [], [], []
@@ -152,7 +168,8 @@ def _track_targets(clip: GeneratedClip, model: DynamicGaussians, reference: dict
                                   model.node_objects.numpy(), model.slots)
     # canonical frame of each instance is its reference frame's world: undo the (initial) pose there
     return (torch.as_tensor(pts, dtype=torch.float32), torch.as_tensor(nodes, dtype=torch.long),
-            torch.as_tensor(weights), torch.as_tensor(clip.tracks[keep]), torch.as_tensor(clip.track_visible[keep]))
+            torch.as_tensor(weights), torch.as_tensor(clip.tracks[keep]), torch.as_tensor(clip.track_visible[keep]),
+            torch.as_tensor(np.asarray(keep, dtype=np.int64)))
 
 
 def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int], dynamic: dict[int, bool],
@@ -162,7 +179,10 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
     torch.manual_seed(seed)
     gen = torch.Generator().manual_seed(seed)
     order_rng = np.random.default_rng(seed)
-    data = ClipTensors(clip, sorted(int(i) for i in np.unique(clip.masks) if i >= 0))
+    data = ClipTensors(clip, sorted(int(i) for i in np.unique(clip.masks) if i >= 0), confidence=cfg.confidence)
+    # the generator's own depth renders are metric and exact: no scale to be blind to
+    depth_origin = (clip.info.get("priors") or {}).get("depth") if isinstance(clip.info.get("priors"), dict) else None
+    invariant_depth = cfg.w_depth_invariant > 0 and depth_origin != "ground_truth"
     scene_depth = float(np.median(clip.depth[clip.depth > 0]))
     bg = torch.tensor(background, dtype=torch.float32)
     # footprint of each Gaussian (initial pixel size), for densification thresholds
@@ -216,23 +236,29 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         rgb, depth, alpha, soft = out["rgb"][0], out["depth"][0], out["alpha"][0], out["features"][0]
         target = data.rgb[t]
         loss = photometric_loss(rgb, target, cfg.w_ssim)
-        loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha, cfg.depth_trim)
+        conf_t = None if data.mask_weight is None else data.mask_weight[t]
+        loss = loss + cfg.w_depth * depth_loss(depth, data.depth[t], alpha, cfg.depth_trim, weight=conf_t)
+        if invariant_depth:
+            loss = loss + cfg.w_depth_invariant * scale_shift_depth_loss(depth, data.depth[t], alpha, data.masks[t],
+                                                                         weight=conf_t)
         onehot_t = data.onehot(t)
-        loss = loss + cfg.w_mask * mask_loss(soft, onehot_t, data.mask_valid[t])
+        loss = loss + cfg.w_mask * mask_loss(soft, onehot_t, data.mask_valid[t], weight=conf_t)
         if cfg.w_mask_iou > 0:
-            loss = loss + cfg.w_mask_iou * mask_iou_loss(soft, onehot_t, data.mask_valid[t])
+            loss = loss + cfg.w_mask_iou * mask_iou_loss(soft, onehot_t, data.mask_valid[t], weight=conf_t)
         loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
         # depth but no instance: translucent matter, drawn but thinner than the background behind it
         loss = loss + cfg.w_empty * empty_alpha_loss(torch.relu(alpha - 0.5), ~data.mask_valid[t])
         if model.node_trans.shape[1]:
             if tracks is not None:
-                pts, tn, tw, tuv, tvis = tracks
+                pts, tn, tw, tuv, tvis, tidx = tracks
+                tconf = None if data.track_weight is None else data.track_weight[tidx]
                 world = model.points_at(pts, tn, tw, t)
                 cam = data.viewmats[t]
                 pc = world @ cam[:3, :3].T + cam[:3, 3]
                 K = data.Ks[t]
                 uv = torch.stack([K[0, 0] * pc[:, 0] / pc[:, 2] + K[0, 2], K[1, 1] * pc[:, 1] / pc[:, 2] + K[1, 2]], -1)
-                loss = loss + cfg.w_track * track_loss(uv, tuv[:, t], tvis[:, t], float(data.W), cfg.track_delta)
+                loss = loss + cfg.w_track * track_loss(uv, tuv[:, t], tvis[:, t], float(data.W), cfg.track_delta,
+                                                     weight=tconf)
             node_pos = model.points_at(node_c0, torch.arange(len(node_c0))[:, None],
                                        torch.ones(len(node_c0), 1), t)
             loss = loss + cfg.w_arap * arap_loss(node_pos, node_c0, pairs) / max(scene_depth ** 2, 1e-9)

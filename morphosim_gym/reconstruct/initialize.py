@@ -20,10 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..priors import setting_label
 from ..scene import GeneratedClip
 from ..scene.rotations import normal_quats
-from .lifting import (PointSet, backproject, instance_motion, instance_tracks, interior_mask, static_residual,
-                      track_noise, voxel_downsample)
+from .lifting import (PointSet, backproject, instance_motion, instance_tracks, interior_mask, mask_motion,
+                      static_residual, track_noise, voxel_downsample)
 from .model import DynamicGaussians
 
 __all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
@@ -43,7 +44,15 @@ class InitConfig:
             3D, not in the image) ...
         noise_factor: ... and by more than this many times the tracks' own noise level
             (`track_noise`, from their jitter), so 1-2 px of track noise never makes a static
-            road "dynamic".
+            road "dynamic" (a static object's residual is about 1.2-2 times the noise: the median
+            of Rayleigh-distributed misplacements). An instance with too few tracks to decide
+            (a small object whose tracks noise pushed off its mask) is judged by how far its
+            lifted mask centroid moves against the static hypothesis instead (`mask_motion`).
+        mask_pixels: an instance whose tracks do not show it moving is still dynamic when its
+            mask centroid misplaces by more than this many pixels (and the tracks' limit) under
+            "it does not move": a small object whose tracks the flow drags along with the
+            background, or that noise pushed off its mask (static objects stay under ~3 px,
+            mask errors of +-2 px move a centroid little).
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -54,7 +63,8 @@ class InitConfig:
     frame_stride: int = 6
     motion_threshold: float = 0.01
     static_pixels: float = 2.0
-    noise_factor: float = 4.0
+    noise_factor: float = 3.0
+    mask_pixels: float = 5.0
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -127,6 +137,51 @@ def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
     return max(static_ids, key=lambda i: int((clip.masks == i).sum()))
 
 
+def _mask_residual(clip: GeneratedClip, instance: int, reference: int, trans: np.ndarray, seen: np.ndarray) -> float:
+    """Pixels by which "this instance does not move" misplaces its mask centroid (75th
+    percentile over the frames where the mask is seen); 0 with fewer than 2 such frames."""
+    if seen.sum() < 2:
+        return 0.0
+    cen = backproject(clip, reference, select=clip.masks[reference] == instance).points
+    if not len(cen):
+        return 0.0
+    c = cen.mean(0)
+    err = []
+    for t in np.flatnonzero(seen):
+        moved, _ = clip.cameras[t].project((c + trans[t])[None])
+        still, _ = clip.cameras[t].project(c[None])
+        err.append(float(np.linalg.norm(moved - still)))
+    return float(np.percentile(err, 75.0))
+
+
+def _decide_motion(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, scene_depth: float,
+                   ) -> tuple[bool, tuple[np.ndarray, np.ndarray]]:
+    """Whether an instance is dynamic, and its per-frame rigid poses (rotations [T, 3, 3],
+    translations [T, 3]) relative to its reference frame (see `InitConfig`)."""
+    label = clip.labels.get(inst, "")
+    if _is_setting(label) or (clip.info.get("setting") and label == setting_label(clip)):
+        return False, (np.tile(np.eye(3), (clip.num_frames, 1, 1)), np.zeros((clip.num_frames, 3)))
+    rots, trans, good = instance_motion(clip, inst, ref)
+    sel = clip.masks[ref] == inst
+    pts = backproject(clip, ref, select=sel)
+    centre = pts.points.mean(0) if len(pts) else np.zeros(3)
+    own = instance_tracks(clip, inst) if clip.tracks is not None else np.zeros(0, int)
+    limit = max(cfg.static_pixels, cfg.noise_factor * track_noise(clip, own)) if clip.tracks is not None \
+        else cfg.static_pixels
+    if good.sum() >= 2:
+        travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
+        if travel > cfg.motion_threshold * scene_depth and static_residual(clip, inst, ref) > limit:
+            return True, (rots, trans)
+    # the tracks do not show it moving (too few of them, or dragged along with the background
+    # by the flow): the mask's own motion decides (translation only)
+    mtrans, seen = mask_motion(clip, inst, ref)
+    travel = float(np.linalg.norm(mtrans, axis=1).max())
+    moving = travel > cfg.motion_threshold * scene_depth and \
+        _mask_residual(clip, inst, ref, mtrans, seen) > max(cfg.mask_pixels, limit)
+    if not moving:
+        return False, (rots, trans)
+    return True, (np.tile(np.eye(3), (clip.num_frames, 1, 1)), mtrans)
+
 def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int = 0) -> InitResult:
     """Build the initial `DynamicGaussians` of a clip (never reads `clip.ground_truth`)."""
     cfg = config or InitConfig()
@@ -146,19 +201,8 @@ def initialize(clip: GeneratedClip, config: InitConfig | None = None, seed: int 
     for inst in ids:
         area = (clip.masks == inst).reshape(T, -1).sum(1)
         ref = int(np.argmax(area))
-        rots, trans, good = instance_motion(clip, inst, ref)
-        # how far a point at the instance's reference centroid travels
-        sel = clip.masks[ref] == inst
-        pts = backproject(clip, ref, select=sel)
-        centre = pts.points.mean(0) if len(pts) else np.zeros(3)
-        travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
-        limit = max(cfg.static_pixels, cfg.noise_factor * track_noise(clip, instance_tracks(clip, inst))) \
-            if clip.tracks is not None else cfg.static_pixels
-        dynamic[inst] = bool(not _is_setting(clip.labels.get(inst, ""))
-                             and travel > cfg.motion_threshold * scene_depth and good.sum() >= 2
-                             and static_residual(clip, inst, ref) > limit)
+        dynamic[inst], poses[inst] = _decide_motion(clip, inst, ref, cfg, scene_depth)
         reference[inst] = ref
-        poses[inst] = (rots, trans)
 
     static_sets, dyn_sets = [], {}
     host = unlabelled_host(clip, [i for i in ids if not dynamic[i]])

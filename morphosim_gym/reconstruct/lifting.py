@@ -12,7 +12,7 @@ import numpy as np
 
 from ..scene import Camera, GeneratedClip
 
-__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "voxel_downsample", "interior_mask",
+__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "mask_motion", "voxel_downsample", "interior_mask",
            "estimate_background_color"]
 
 
@@ -132,10 +132,27 @@ def _lift_tracks(clip: GeneratedClip, frame: int, uv: np.ndarray) -> tuple[np.nd
     return clip.cameras[frame].unproject(uv, z), z > 0
 
 
-def instance_tracks(clip: GeneratedClip, instance: int) -> np.ndarray:
+def instance_tracks(clip: GeneratedClip, instance: int, tolerance: float | None = None,
+                    min_tracks: int = 8) -> np.ndarray:
     """Indices of the 2D tracks that belong to an instance: those landing on its mask in more
-    than 80% of the frames where they are visible."""
+    than 80% of the frames where they are visible. A track counts as on the mask within
+    `tolerance` pixels of it. By default (None) first exactly on it, and, when fewer than
+    `min_tracks` tracks qualify so, within twice the clip's track noise (`track_noise`, rounded):
+    1-2 px of noise must not take a small object's tracks away from it, while a large object
+    keeps only the tracks really on it."""
     tr, vis = clip.tracks, clip.track_visible
+    if tolerance is None:
+        strict = instance_tracks(clip, instance, 0.0)
+        if len(strict) >= min_tracks:
+            return strict
+        tolerance = 2.0 * track_noise(clip, np.arange(len(tr)))
+        if int(round(tolerance)) == 0:
+            return strict
+    masks = clip.masks == instance
+    r_px = int(round(tolerance))
+    if r_px > 0:
+        k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r_px + 1, 2 * r_px + 1))
+        masks = np.stack([cv2.dilate(m.astype(np.uint8), k).astype(bool) for m in masks])
     own = np.zeros(len(tr), bool)
     for p in range(len(tr)):
         frames = np.flatnonzero(vis[p])
@@ -144,8 +161,39 @@ def instance_tracks(clip: GeneratedClip, instance: int) -> np.ndarray:
         uv = tr[p, frames]
         c = np.clip(np.floor(uv[:, 0]).astype(int), 0, clip.width - 1)
         r = np.clip(np.floor(uv[:, 1]).astype(int), 0, clip.height - 1)
-        own[p] = (clip.masks[frames, r, c] == instance).mean() > 0.8
+        own[p] = masks[frames, r, c].mean() > 0.8
     return np.flatnonzero(own)
+
+
+def mask_motion(clip: GeneratedClip, instance: int, reference: int, min_pixels: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    """Track-free motion of an instance: per-frame world translations [T, 3] of the centroid of
+    its lifted mask relative to the reference frame, and a [T] bool of frames where the mask
+    (away from the image border) was seen. A fallback for instances with too few tracks (a
+    small object under noisy tracks); robust to track noise since it reads masks and depth only."""
+    T = clip.num_frames
+    trans = np.zeros((T, 3))
+    seen = np.zeros(T, bool)
+
+    def centroid(t: int) -> np.ndarray | None:
+        m = (clip.masks[t] == instance) & (clip.depth[t] > 0)
+        if m.sum() < min_pixels or m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any():
+            return None
+        rows, cols = np.nonzero(m)
+        uv = np.stack([cols + 0.5, rows + 0.5], -1).astype(np.float64)
+        z = np.median(clip.depth[t][m].astype(np.float64))
+        return clip.cameras[t].unproject(uv.mean(0, keepdims=True), np.array([z]))[0]
+
+    c_ref = centroid(reference)
+    if c_ref is None:
+        return trans, seen
+    for t in range(T):
+        c = c_ref if t == reference else centroid(t)
+        if c is not None:
+            trans[t], seen[t] = c - c_ref, True
+    est = np.flatnonzero(seen)
+    for t in np.flatnonzero(~seen):
+        trans[t] = trans[est[np.argmin(np.abs(est - t))]]
+    return trans, seen
 
 
 def track_noise(clip: GeneratedClip, idx: np.ndarray) -> float:

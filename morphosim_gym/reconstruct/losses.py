@@ -7,7 +7,7 @@ import torch.nn.functional as F
 
 from .model import gather_rows
 
-__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
+__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "scale_shift_depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
            "arap_loss", "smooth_motion_loss", "psnr_torch"]
 
 _WINDOWS: dict[tuple, torch.Tensor] = {}
@@ -45,24 +45,71 @@ def photometric_loss(pred: torch.Tensor, target: torch.Tensor, ssim_weight: floa
     return (1 - ssim_weight) * (pred - target).abs().mean() + ssim_weight * ssim_loss(pred, target)
 
 
-def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor, trim: float = 0.0) -> torch.Tensor:
+def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor, trim: float = 0.0,
+               weight: torch.Tensor | None = None) -> torch.Tensor:
     """Relative L1 depth error where the prior has a depth and the render is mostly opaque; with
     `trim` > 0 the largest `trim` fraction of the errors is left out (a trimmed mean: an imperfect
-    prior's outliers, such as a wrong object depth or a mask a pixel off, do not pull the fit)."""
+    prior's outliers, such as a wrong object depth or a mask a pixel off, do not pull the fit);
+    `weight` [H, W] scales each pixel's error (its confidence)."""
     valid = (target > 0) & (alpha.detach() > 0.5)
     if not valid.any():
         return pred.sum() * 0.0
     err = (pred[valid] - target[valid]).abs() / target[valid]
+    if weight is not None:
+        err = err * weight[valid]
     if trim > 0 and err.numel() > 10:
         keep = max(1, int(round(err.numel() * (1.0 - trim))))
         err = torch.topk(err, keep, largest=False, sorted=False).values
     return err.mean()
 
 
-def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
+def scale_shift_depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor, groups: torch.Tensor,
+                           weight: torch.Tensor | None = None, delta: float = 0.05, min_pixels: int = 8) -> torch.Tensor:
+    """Scale- and shift-invariant depth term: within each group of pixels (`groups` [H, W] ids,
+    one per instance; < 0 left out) the prior `target` [H, W] is aligned to the render by the
+    (weighted) least-squares scale and shift (computed without gradient), and the render pays
+    a Huber distance (`delta`, relative to the group's median depth) to the aligned prior. The
+    render keeps the prior's shape (which part is nearer, how the ground recedes) without its
+    scale, which an estimated depth often gets wrong per object. Pixels without a prior or
+    mostly transparent are left out; groups under `min_pixels` pixels too. `weight` [H, W] are
+    per-pixel confidences."""
+    valid = (target > 0) & (alpha.detach() > 0.5) & (groups >= 0)
+    if not valid.any():
+        return pred.sum() * 0.0
+    w_all = weight if weight is not None else torch.ones_like(target)
+    terms, counts = [], []
+    for g in torch.unique(groups[valid]).tolist():
+        sel = valid & (groups == g)
+        n = int(sel.sum())
+        if n < min_pixels:
+            continue
+        x, y, w = target[sel], pred[sel], w_all[sel].to(pred.dtype)
+        with torch.no_grad():
+            yd = y.detach()
+            sw = w.sum().clamp(min=1e-9)
+            mx, my = (w * x).sum() / sw, (w * yd).sum() / sw
+            vx = (w * (x - mx) ** 2).sum() / sw
+            scale = ((w * (x - mx) * (yd - my)).sum() / sw / vx).clamp(0.2, 5.0) if vx > 1e-10 else torch.ones(())
+            shift = my - scale * mx
+            ref = my.abs().clamp(min=1e-6)
+        r = (y - (scale * x + shift)).abs() / ref
+        hub = torch.where(r < delta, 0.5 * r * r / delta, r - 0.5 * delta)
+        terms.append((hub * w).sum() / w.sum().clamp(min=1e-9))
+        counts.append(n)
+    if not terms:
+        return pred.sum() * 0.0
+    c = torch.tensor(counts, dtype=pred.dtype)
+    return (torch.stack(terms) * c).sum() / c.sum()
+
+
+def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None,
+              weight: torch.Tensor | None = None) -> torch.Tensor:
     """MSE between rendered soft instance maps [H, W, K] and one-hot masks [H, W, K], over the
-    `valid` [H, W] pixels (all by default)."""
+    `valid` [H, W] pixels (all by default), each weighted by its `weight` [H, W] (the mask
+    prior's confidence; 1 by default)."""
     err = ((soft - target_onehot) ** 2).sum(-1) / soft.shape[-1]
+    if weight is not None:
+        err = err * weight
     if valid is None:
         return err.mean()
     if not valid.any():
@@ -70,15 +117,24 @@ def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tens
     return err[valid].mean()
 
 
-def mask_iou_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None) -> torch.Tensor:
+def mask_iou_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None,
+                  weight: torch.Tensor | None = None) -> torch.Tensor:
     """1 - soft IoU (sum of minima over sum of maxima) of each instance's rendered map [H, W, K]
     with its mask [H, W, K], averaged over the instances present in the frame. Every instance
     weighs the same whatever its area, so the outline of a small object counts as much as the
-    ground's (a pixel-mean loss barely sees it)."""
+    ground's (a pixel-mean loss barely sees it). Pixels count by their `weight` [H, W] in both
+    sums (the mask prior's confidence; 1 by default)."""
+    keep = None
     if valid is not None:
         keep = valid[..., None].to(soft.dtype)
+    if weight is not None:
+        keep = weight[..., None].to(soft.dtype) if keep is None else keep * weight[..., None].to(soft.dtype)
+    if keep is not None:
+        present_mask = (target_onehot * (valid[..., None] if valid is not None else 1.0)).sum(dim=(0, 1)) > 0
         soft, target_onehot = soft * keep, target_onehot * keep
-    present = target_onehot.sum(dim=(0, 1)) > 0
+    else:
+        present_mask = target_onehot.sum(dim=(0, 1)) > 0
+    present = present_mask & (target_onehot.sum(dim=(0, 1)) > 0)
     if not present.any():
         return soft.sum() * 0.0
     s, t = soft.clamp(0.0, 1.0)[..., present], target_onehot[..., present]
@@ -95,17 +151,22 @@ def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:
 
 
 def track_loss(pred_uv: torch.Tensor, target_uv: torch.Tensor, visible: torch.Tensor, size: float,
-               delta: float = 0.0) -> torch.Tensor:
+               delta: float = 0.0, weight: torch.Tensor | None = None) -> torch.Tensor:
     """Mean distance (in units of the image size) of projected track points to their 2D tracks:
     L1 per coordinate, or with `delta` > 0 (pixels) Huber (quadratic below `delta`, so a
     track's pixel-level jitter is averaged rather than followed; linear above it, so a lost
-    track pulls no harder than under L1)."""
+    track pulls no harder than under L1). Each track counts by its `weight` [P] (its
+    confidence; a weighted mean, 1 by default)."""
     if not visible.any():
         return pred_uv.sum() * 0.0
     r = (pred_uv[visible] - target_uv[visible]).abs()
     if delta > 0:
         r = torch.where(r < delta, 0.5 * r * r / delta, r - 0.5 * delta)
-    return (r.sum(-1) / size).mean()
+    per = r.sum(-1) / size
+    if weight is None:
+        return per.mean()
+    w = (weight if visible.dim() == 1 else weight[:, None].expand_as(visible))[visible].to(per.dtype)
+    return (per * w).sum() / w.sum().clamp(min=1e-6)
 
 
 def arap_loss(node_pos_t: torch.Tensor, node_pos_0: torch.Tensor, pairs: torch.Tensor) -> torch.Tensor:

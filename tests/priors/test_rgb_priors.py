@@ -142,3 +142,26 @@ def test_an_object_entering_after_the_first_frame_is_tracked():
     on = visible[:, 6] & visible[:, 8] & (tracks[:, 6, 1] > 21) & (tracks[:, 6, 1] < 31) & (tracks[:, 6, 0] > 52)
     assert on.sum() >= 3
     assert np.allclose(tracks[on, 8, 0] - tracks[on, 6, 0], -6.0, atol=1.0)
+
+
+def test_still_planned_objects_are_found_by_colour():
+    from morphosim_gym.priors.masks import static_plan_labels
+
+    frames, boxes = _moving_square()
+    frames = frames.copy()
+    frames[:, 30:44, 50:56] = (40, 160, 60)          # a still green plant, never moving
+    est = RGBPriorEstimators(setting_label="water")
+    cams = [_camera()] * len(frames)
+    masks, labels = est.masks(frames, None, [PlanTarget("fish", boxes)], cameras=cams, static_labels=["seaweed"])
+    sid = next(k for k, v in labels.items() if v == "seaweed")
+    truth = np.zeros(masks.shape[1:], bool)
+    truth[30:44, 50:56] = True
+    for i in range(len(frames)):
+        pred = masks[i] == sid
+        assert (pred & truth).sum() / (pred | truth).sum() > 0.8
+    # without the plan naming it, the plant is part of the setting
+    plain, plain_labels = est.masks(frames, None, [PlanTarget("fish", boxes)], cameras=cams)
+    assert "seaweed" not in plain_labels.values() and np.all(plain[:, 35, 52] == 0)
+    info = {"plan": {"objects": [{"name": "cube"}, {"name": "plate"}],
+                     "motions": [{"target": "cube", "path": "straight"}]}, "setting": "underwater"}
+    assert static_plan_labels(info) == ["plate", "seaweed"]

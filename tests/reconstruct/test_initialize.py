@@ -40,3 +40,32 @@ def test_a_fixed_camera_keeps_static_and_moving_apart():
     clip = sim.generate_clip("The bus is moving from right to left", seed=0)
     result = initialize(clip, seed=0)
     assert {clip.labels[i]: d for i, d in result.dynamic.items()} == {"road": False, "bus": True}
+
+
+@pytest.mark.parametrize("noise", [1.0, 2.0])
+def test_static_and_moving_survive_track_noise(orbit_clip, noise):
+    # 1-2 px of track noise (and +-2 px masks, 10% dropped observations) must neither make the
+    # still table or plate "dynamic" nor take the moving cube's tracks away from it
+    from morphosim_gym.priors import corrupt_priors
+
+    clip = corrupt_priors(orbit_clip, seed=0, track_noise=noise)
+    result = initialize(clip, seed=0)
+    assert {clip.labels[i]: d for i, d in result.dynamic.items()} == {"table": False, "cube": True, "plate": False}
+
+
+def test_a_small_object_without_tracks_is_judged_by_its_mask():
+    # no tracks land on the bus (all of them dropped there): its mask's motion decides, and
+    # its poses come from the mask centroid (it drives right to left: -x)
+    from dataclasses import replace
+
+    sim = ms.MorphoSim(generation=SMALL, reconstruction="oracle")
+    clip = sim.generate_clip("The bus is moving from right to left", seed=0)
+    bus = next(i for i, n in clip.labels.items() if n == "bus")
+    t0 = clip.tracks[:, 0].astype(int).clip(0, clip.width - 1)
+    on_bus = np.array([np.any(clip.masks[:, r, c] == bus) for c, r in t0])
+    clip = replace(clip, tracks=clip.tracks[~on_bus], track_visible=clip.track_visible[~on_bus])
+    result = initialize(clip, seed=0)
+    assert {clip.labels[i]: d for i, d in result.dynamic.items()} == {"road": False, "bus": True}
+    trans = result.instance_poses[bus][1]
+    ref = result.reference[bus]
+    assert trans[0, 0] - trans[ref, 0] > 0.5 and trans[-1, 0] - trans[ref, 0] < -0.5

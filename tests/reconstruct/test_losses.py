@@ -1,5 +1,6 @@
 """Mask losses of the fit: the pixel-mean MSE and the per-instance soft IoU."""
 
+import pytest
 import torch
 
 from morphosim_gym.reconstruct.losses import mask_iou_loss, mask_loss
@@ -51,3 +52,27 @@ def test_covering_more_than_the_object_costs():
     # object: IoU 16 / 1024; ground: untouched, IoU 1
     expected = (1 - 16 / 1024) / 2
     assert abs(loss - expected) < 1e-4 and loss > 0.45
+
+
+def test_scale_shift_depth_is_blind_to_scale_and_shift_only():
+    from morphosim_gym.reconstruct.losses import scale_shift_depth_loss
+
+    rows = torch.linspace(2.0, 6.0, 16)[:, None].expand(16, 16).clone()       # a receding ground
+    groups = torch.zeros(16, 16, dtype=torch.long)
+    alpha = torch.ones(16, 16)
+    # the prior at the wrong scale and offset: no penalty (the shape is right)
+    assert scale_shift_depth_loss(rows, 0.5 * rows + 1.0, alpha, groups) == pytest.approx(0.0, abs=1e-6)
+    # the wrong shape (the ground flipped) pays, and a gradient step moves the render towards it
+    flipped = rows.flip(0)
+    pred = rows.clone().requires_grad_(True)
+    loss = scale_shift_depth_loss(pred, flipped, alpha, groups)
+    assert loss > 0.01
+    loss.backward()
+    step = pred.detach() - 1.0 * pred.grad
+    assert scale_shift_depth_loss(step, flipped, alpha, groups) < loss
+    # groups are aligned separately: two objects, each with its own scale, pay nothing
+    g2 = groups.clone()
+    g2[:, 8:] = 1
+    two = torch.where(g2 == 1, 3.0 * rows, rows)
+    assert scale_shift_depth_loss(rows, two, alpha, g2) == pytest.approx(0.0, abs=1e-6)
+    assert scale_shift_depth_loss(rows, two, alpha, groups) > 0.01

@@ -1,0 +1,95 @@
+"""Size priors from the category: the generator's sizes, and the depth they give an object."""
+
+import numpy as np
+import pytest
+
+from morphosim_gym.priors import CATEGORY_SIZES, ObjectSize, planned_sizes, size_depth
+from morphosim_gym.priors.depth import contact_depth, ground_plane_depth
+from morphosim_gym.priors.rgb import object_depths
+from morphosim_gym.scene import Camera
+
+
+def _camera(w=64, h=48):
+    return Camera.look_at((0.0, -6.0, 2.0), (0.0, 0.0, 0.5), width=w, height=h, fov_y_deg=50.0)
+
+
+def test_category_sizes_are_the_generators():
+    from morphosim_gym.generate.assets import CATEGORY_SPECS, build_parts
+    from morphosim_gym.scene.parts import parts_to_gaussians
+
+    for name, size in CATEGORY_SIZES.items():
+        c = parts_to_gaussians(build_parts(name), 1500, np.full(3, 0.5), np.random.default_rng(0))
+        ext = c.means.max(0) - c.means.min(0)
+        assert size.height == pytest.approx(float(ext[2]), rel=0.05, abs=0.01), name
+        assert size.longest == pytest.approx(float(max(ext[0], ext[1])), rel=0.05, abs=0.01), name
+        if name in CATEGORY_SPECS:
+            assert size.mobility == CATEGORY_SPECS[name].mobility, name
+
+
+def test_planned_sizes_scale_and_floor():
+    info = {"plan": {"objects": [{"name": "bus", "category": "bus", "scale": 1.0},
+                                 {"name": "cube", "category": "cube", "scale": 2.0},
+                                 {"name": "thing", "category": "no such category"}]}}
+    s = planned_sizes(info)
+    assert set(s) == {"bus", "cube"} and s["bus"] == CATEGORY_SIZES["bus"]
+    # a cube next to a 6 m bus is grown to 30% of it, as the generator does
+    assert max(s["cube"].height, s["cube"].longest) == pytest.approx(0.3 * 6.02)
+    assert planned_sizes({}) == {}
+
+
+def test_size_depth_from_pixel_height():
+    cam = _camera()
+    m = np.zeros((48, 64), bool)
+    m[10:30, 20:30] = True                                  # 20 rows
+    assert size_depth(m, cam, 2.0) == pytest.approx(cam.fy * 2.0 / 20)
+    # seen from above, a box's depth extent adds to its rows: the same rows put it farther
+    assert size_depth(m, cam, ObjectSize(2.0, 2.0)) > 1.1 * size_depth(m, cam, 2.0)
+    cut = m.copy()
+    cut[0:5, 20:30] = True                                  # touches the top border
+    assert size_depth(cut, cam, 2.0) is None
+    blocked = np.zeros_like(m)
+    blocked[30:40, 15:35] = True                            # an object in front hides its bottom
+    assert size_depth(m, cam, 2.0, blocked=blocked) is None
+
+
+def _drawn(cam, z, height, col=32):
+    """Mask [H, W] of an upright object `height` m tall at camera depth z whose bottom row sits at
+    the ground's row for that depth (standing) -- rows from the ground depth image."""
+    ground = ground_plane_depth(cam)
+    rows = np.flatnonzero(np.abs(ground[:, col] - z) == np.abs(ground[:, col] - z).min())
+    bottom = int(rows[0])
+    n = max(3, int(round(cam.fy * height / z)))
+    m = np.zeros((cam.height, cam.width), bool)
+    m[bottom - n:bottom, col - 4:col + 4] = True
+    return m, ground
+
+
+def test_a_swimmer_takes_its_depth_from_its_size():
+    cam = _camera()
+    m, ground = _drawn(cam, 6.0, 1.0)
+    m = np.roll(m, -8, axis=0)                             # 8 rows higher: off the ground
+    masks = np.where(m, 1, 0)[None].repeat(5, 0)
+    grounds = ground[None].repeat(5, 0)
+    contact = object_depths(masks, 1, grounds, [cam] * 5, None)
+    thin = ObjectSize(1.0, 0.01, "swim")                   # 1 m tall, 1 cm deep: a flat fin
+    swim = object_depths(masks, 1, grounds, [cam] * 5, thin)
+    expect = size_depth(m, cam, thin)
+    assert expect == pytest.approx(6.0, rel=0.1)          # drawn at 6 m
+    assert np.allclose(swim, expect)
+    # the ground contact is farther: the floor seen just under a swimmer lies behind it
+    assert np.all(contact > 1.5 * expect)
+    # a ground object lifted off the ground (a bouncing ball in the air) takes its size there too
+    lifted = object_depths(masks, 1, grounds, [cam] * 5, ObjectSize(1.0, 0.01, "ground"), lifted_ratio=1.1)
+    assert np.allclose(lifted, expect)
+
+
+def test_contact_takes_the_nearest_feet():
+    # a sheep-like mask: a body with two legs reaching lower; the legs' contact is the object's
+    cam = _camera()
+    ground = ground_plane_depth(cam)
+    m = np.zeros((48, 64), bool)
+    m[20:28, 20:40] = True
+    m[28:34, 21:23] = m[28:34, 37:39] = True
+    low = contact_depth(m, ground, 1.0, percentile=10)
+    assert low == pytest.approx(float(ground[34, 22]), rel=0.02)
+    assert contact_depth(m, ground, 1.0) > 1.1 * low        # the median sees the ground under the belly
