@@ -139,8 +139,8 @@ def _compact(text: str) -> str:
     return "".join(singular(w) for w in re.findall(r"[a-z]+", text.lower()))
 
 
-# a name "<noun> <head>" shows the noun when both words are things of one WordNet kind (lexicographer
-# file) and this similar: "Chandelier lamp" (0.53) for "chandelier", not "Dog house" or "Spider plant"
+# a name "<noun> <head>" shows the noun when both words are artifacts (WordNet's lexicographer file)
+# and this similar: "Chandelier lamp" (0.53) for "chandelier", not "Dog house" or "Spider plant"
 APPOSITION_FLOOR = 0.5
 # an asset tag names it ("nightstand" on "Bedside table") when at most this many candidates carry it
 # and the noun is this similar to the candidate's name
@@ -154,8 +154,8 @@ def _appositive(noun: str, text: str) -> bool:
     if len(words) < 2 or singular(words[-2]) != singular(noun) or "with" in words:
         return False
     mine, theirs = hypernyms.ranked_senses(singular(noun))[:1], hypernyms.ranked_senses(singular(words[-1]))[:1]
-    if not mine or not theirs or mine[0].lexfile != theirs[0].lexfile:
-        return False
+    if not mine or not theirs or not mine[0].lexfile == theirs[0].lexfile == "artifact":
+        return False   # only made things: "Orange juice", "Tomato sauce", "Peach blossom" are not the noun
     v = embeddings.embed([f"a {noun}", f"a {words[-1]}"])
     return float(v[0] @ v[1]) >= APPOSITION_FLOOR
 
