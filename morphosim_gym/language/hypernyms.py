@@ -60,14 +60,19 @@ def ranked_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]:
     if not person or any(s.lexfile != "person" for _, _, s in ranked):
         ranked = [r for r in ranked if r[2].lexfile != "person"]
     top = max((c for c, _, _ in ranked), default=0)
-    tied = [r for r in ranked if r[0] == top]
-    near: dict[int, float] = {}
-    if len(tied) > 1 and embeddings.is_available():
-        vecs = embeddings.embed([f"a {word}"] + [f"{s.lemmas[0].replace('_', ' ')}: {s.gloss.split(';')[0]}"
-                                                 for _, _, s in tied])
-        near = {i: float(v @ vecs[0]) for (_, i, _), v in zip(tied, vecs[1:])}
+    near = _gloss_nearness(word, [(i, s) for c, i, s in ranked if c == top])
     ranked.sort(key=lambda r: (-r[0], -near.get(r[1], 0.0), r[1]))
     return tuple(s for _, _, s in ranked)
+
+
+def _gloss_nearness(word: str, tied: list[tuple[int, wordnet.Synset]]) -> dict[int, float]:
+    """Sense number -> embedding similarity of "a <word>" with "<lemma>: <gloss>", for senses tied
+    in count ({} for fewer than two, or without the model)."""
+    if len(tied) < 2 or not embeddings.is_available():
+        return {}
+    vecs = embeddings.embed([f"a {word}"] + [f"{s.lemmas[0].replace('_', ' ')}: {s.gloss.split(';')[0]}"
+                                             for _, s in tied])
+    return {i: float(v @ vecs[0]) for (i, _), v in zip(tied, vecs[1:])}
 
 
 @lru_cache(maxsize=256)

@@ -196,11 +196,8 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
     if not stop_word(w) or (w in SPEED_WORDS_1 and nxt is not None and not stop_word(nxt)):
         return False
     after = toks[j + 2] if j + 2 < len(toks) else None
-    if collected and compound_noun(toks[collected[-1]], w):
-        return False  # the second word of a compound noun WordNet knows: "a frying pan" (not the camera's pan)
-    if np_.det is not None and not collected and w in VERBS and (nxt is None or nxt in VERBS or nxt in AUX) \
-            and hypernyms.ranked_senses(w):
-        return False  # a verb that is also a visible thing, alone after an article: "a swing", "a swing sways"
+    if _noun_not_verb(w, nxt, np_, [toks[k] for k in collected]):
+        return False
     if np_.det is not None and w in VERBS and nxt is not None and not stop_word(nxt) and not known_word(nxt) \
             and (after in VERBS or after in AUX):
         return False  # a verb-like word of an unknown compound noun before its verb: "a red go kart moves"
@@ -211,6 +208,16 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
         if collected and (nxt is None or nxt in VERBS or nxt in AUX):
             return False
     return True
+
+
+def _noun_not_verb(w: str, nxt: str | None, np_: NounPhrase, collected: list[str]) -> bool:
+    """A stop word that is a noun here: the second word of a compound noun WordNet knows ("a frying
+    pan", not the camera's pan), or a verb that is a visible thing alone after an article ("a swing",
+    "a swing sways")."""
+    if collected and compound_noun(collected[-1], w):
+        return True
+    return bool(np_.det is not None and not collected and w in VERBS and (nxt is None or nxt in VERBS or nxt in AUX)
+                and hypernyms.ranked_senses(w))
 
 
 def compound_noun(first: str, second: str) -> bool:
