@@ -4,6 +4,8 @@ assets on, for judging by a person (issue #19: the share a person would accept).
 
     .venv/bin/python benchmarks/noun_sample.py --seed 19 --n 50 [--draw-only]
     .venv/bin/python benchmarks/noun_sample.py --seed 2027 --n 60 --exclude-seed 19 --exclude-n 50   # held out
+    .venv/bin/python benchmarks/noun_sample.py --seed 4099 --n 60 --exclude-seed 19 --exclude-n 50 \
+        --exclude-seed 2027 --exclude-n 60                                                           # third
 
 The sample is drawn from the list by `numpy.random.default_rng(seed)` before anything resolves
 (`--exclude-seed`: first leave out the nouns of an earlier sample, so the new one is held out).
@@ -30,12 +32,15 @@ def all_nouns() -> list[str]:
     return [x.strip() for x in NOUNS.read_text().splitlines() if x.strip() and not x.startswith("#")]
 
 
-def draw(seed: int, n: int, exclude: tuple[int, int] | None = None) -> list[str]:
-    """`n` nouns of the list by the seed; `exclude` (seed, n): without the nouns that sample drew."""
+def draw(seed: int, n: int, exclude: tuple[int, int] | list[tuple[int, int]] | None = None) -> list[str]:
+    """`n` nouns of the list by the seed; `exclude`: one (seed, n) or a list of them, each drawn
+    as it was (each one without the samples listed before it), without the nouns they drew."""
     nouns = all_nouns()
-    if exclude is not None:
-        gone = set(draw(*exclude))
-        nouns = [x for x in nouns if x not in gone]
+    earlier = [exclude] if isinstance(exclude, tuple) else list(exclude or [])
+    gone: set[str] = set()
+    for i, (s, k) in enumerate(earlier):
+        gone |= set(draw(s, k, earlier[:i] or None))
+    nouns = [x for x in nouns if x not in gone]
     return [nouns[i] for i in sorted(np.random.default_rng(seed).choice(len(nouns), n, replace=False).tolist())]
 
 
@@ -65,14 +70,21 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=19)
     ap.add_argument("--n", type=int, default=50)
     ap.add_argument("--draw-only", action="store_true")
-    ap.add_argument("--exclude-seed", type=int, default=None, help="leave out the nouns of the sample of this seed")
-    ap.add_argument("--exclude-n", type=int, default=50, help="... of this size")
+    ap.add_argument("--exclude-seed", type=int, action="append", default=[],
+                    help="leave out the nouns of the sample of this seed (repeat for several samples, in the "
+                         "order they were drawn; each was drawn without the ones before it)")
+    ap.add_argument("--exclude-n", type=int, action="append", default=[], help="... of this size (one per "
+                    "--exclude-seed; default 50)")
     ap.add_argument("--grounding", default=None, help="grounding level (default: the library's)")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
-    exclude = None if args.exclude_seed is None else (args.exclude_seed, args.exclude_n)
+    if len(args.exclude_n) > len(args.exclude_seed):
+        ap.error(f"Expected at most one --exclude-n per --exclude-seed, found {len(args.exclude_n)} for "
+                 f"{len(args.exclude_seed)}")
+    sizes = args.exclude_n + [50] * (len(args.exclude_seed) - len(args.exclude_n))
+    exclude = list(zip(args.exclude_seed, sizes))
     sample = draw(args.seed, args.n, exclude)
-    held = f", without the seed-{exclude[0]} sample" if exclude else ""
+    held = "".join(f", without the seed-{s} sample" for s, _ in exclude)
     print(f"sample (seed {args.seed}, {args.n}{held}): {', '.join(sample)}")
     if args.draw_only:
         return 0
@@ -94,7 +106,7 @@ def main() -> int:
             print(f"  {r['noun']:18s} -> {r['result']}{' (' + r['asset_name'] + ')' if 'asset_name' in r else ''}"
                   f" [{r.get('method', '')}{sim}]{' STAND-IN' if r.get('stand_in') else ''}")
     if args.json:
-        args.json.write_text(json.dumps({"seed": args.seed, "exclude": exclude, "grounding": level, "sample": sample,
+        args.json.write_text(json.dumps({"seed": args.seed, "exclude": [list(e) for e in exclude], "grounding": level, "sample": sample,
                                          "rows": rows}, indent=1) + "\n")
     return 0
 

@@ -24,6 +24,7 @@ import re
 import numpy as np
 
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
+from ..language.hypernyms import head_word, kind_category, ranked_senses
 from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
 from ..scene.rotations import matrix_to_quat, quat_multiply
@@ -89,6 +90,13 @@ def _words(text: str) -> set[str]:
     return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")}
 
 
+def _other_compound(name: str, category: str) -> bool:
+    """A name WordNet knows as a compound that is not a kind of the category ("Hot dog" is food)."""
+    words = _WORD.findall(name.lower())
+    return len(words) > 1 and bool(ranked_senses(" ".join(words))) and \
+        kind_category(" ".join(words), [category]) is None
+
+
 @functools.lru_cache(maxsize=256)
 def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRecord, ...]:
     index = _index_for(sources)
@@ -103,7 +111,10 @@ def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRe
         head = words[-1] if words else ""
         if excluded & _words(" ".join((r.name, *r.tags))):
             return False
-        return r.category == category or bool(want and want <= _words(r.name)) or head in synonyms
+        # the category's words in the name count only with its last word as the name's head noun:
+        # "Dog house" is a house, not a dog
+        named = bool(want and want <= _words(r.name)) and head_word(r.name) in _words(category.split("_")[-1])
+        return r.category == category or ((named or head in synonyms) and not _other_compound(r.name, category))
 
     hits = [r for r in index if r.kind in ("mesh", "splat") and matches(r)]
     return tuple(sorted(hits, key=lambda r: r.id))
@@ -111,7 +122,7 @@ def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRe
 
 def asset_candidates(category: str) -> tuple[AssetRecord, ...]:
     """Every mesh or splat asset matching a category: same category, or the name holds the words of
-    its name, or its last word is one of its vocabulary synonyms ("person": "Sitting boy"), by id;
+    its name with its last word as the name's head noun ("Dog house" is not a dog), or its last word is one of its vocabulary synonyms ("person": "Sitting boy"), by id;
     never one whose name or tags hold a word of the category's `EXCLUDED_WORDS` (ceiling lamps)."""
     if category.startswith(ASSET_PREFIX):
         aid = category[len(ASSET_PREFIX):]

@@ -48,6 +48,7 @@ import numpy as np
 
 from ..errors import AmbiguousTargetError, CommandError, TargetNotFoundError
 from . import embeddings, hypernyms, open_vocab, wordnet
+from .open_vocab import is_open_category as is_open
 from .lexicon import english_words
 from .vocabulary import CATEGORIES, SETTINGS, noun_to_category, singular, word_to_setting
 
@@ -276,21 +277,26 @@ def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_n
 def _ground_kind(noun: str, phrase: str, kind_noun: str) -> Grounding | None:
     """A stand-in of the same kind: among the categories and the `KIND_TOP` most similar open
     candidates, those sharing the noun's nearest meaningful WordNet hypernym
-    (`hypernyms.shared_kind`), the most similar; None when none shares one."""
+    (`hypernyms.shared_kind`), the most similar, for the noun's dominant sense that any candidate
+    shares; None when none shares one. A candidate at distance 0 (the noun's own sense, or a kind
+    of it) is a checked match, not a stand-in."""
     vec, labels, _ = _anchor_table(False)
     q = embeddings.embed([f"a {phrase}"])[0]
     sims = vec @ q
-    pool: list[tuple[str, float, tuple[int, str] | None]] = []
-    for c in CATEGORIES:
-        sim = max(float(sims[i]) for i, lab in enumerate(labels) if lab == ("category", c))
-        pool.append((c, sim, hypernyms.shared_kind(kind_noun, category=c)))
-    for m in open_vocab.nearest_candidates(phrase, k=KIND_TOP):
-        pool.append((m.category, m.similarity, hypernyms.shared_kind(kind_noun, text=m.text)))
-    kinds = [(d, -sim, label, name) for label, sim, hit in pool if hit is not None for d, name in [hit]]
-    if not kinds:
-        return None
-    _, neg_sim, label, name = min(kinds)
-    return Grounding(noun, label, method="kind", similarity=round(-neg_sim, 4), shared_kind=name)
+    cands = [(c, max(float(sims[i]) for i, lab in enumerate(labels) if lab == ("category", c)), None, c)
+             for c in CATEGORIES]
+    cands += [(m.category, m.similarity, m.text, None) for m in open_vocab.nearest_candidates(phrase, k=KIND_TOP)]
+    for sense in range(hypernyms.noun_sense_count(kind_noun)):   # the dominant sense any candidate shares
+        kinds = [(d, -sim, label, name) for label, sim, text, cat in cands
+                 for hit in [hypernyms.shared_kind(kind_noun, text=text, category=cat, sense=sense)]
+                 if hit is not None for d, name in [hit]]
+        if kinds:
+            d, neg_sim, label, name = min(kinds)
+            if d == 0:   # the candidate is the noun's own sense or a kind of it ("Small lavatory" for "toilet")
+                return Grounding(noun, label, kind="category", method="open" if is_open(label) else "embedding",
+                                 similarity=round(-neg_sim, 4))
+            return Grounding(noun, label, method="kind", similarity=round(-neg_sim, 4), shared_kind=name)
+    return None
 
 
 # -- scene resolution --------------------------------------------------------------------------------

@@ -2,9 +2,14 @@
 
 Embedding similarity alone puts "tiger" next to "elephant" and "pear" next to "apple"; WordNet
 says an eagle is a bird and a tiger is not a cat. Only senses of visible things count (animal,
-artifact, food, object, plant, person), among a word's three most frequent senses; a person
-sense counts only when the word has no other visible sense ("monitor" is a screen, not a proctor).
-Every function answers None when WordNet is not installed or does not know the word.
+artifact, food, object, plant, person); a person sense counts only when the word has no other
+visible sense ("monitor" is a screen, not a proctor). A word's senses are ranked
+(`ranked_senses`): most often tagged in WordNet's corpus first, and senses tagged equally often
+(most are never tagged) by how near the embedding model puts "a <word>" to each sense's gloss,
+so "turtle" is the reptile, not the turtleneck WordNet lists first. A noun is read through its
+first ranked senses; a candidate's name through its dominant sense only ("Peacock" is the bird,
+not the peacock butterfly). Every function answers None when WordNet is not installed or does
+not know the word.
 """
 
 from __future__ import annotations
@@ -13,10 +18,11 @@ import re
 from collections.abc import Iterable
 from functools import lru_cache
 
-from . import wordnet
+from . import embeddings, wordnet
 from .vocabulary import singular
 
-__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "head_word", "kind_category", "related", "shared_kind", "visible_senses"]
+__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "head_word", "kind_category", "noun_sense_count", "ranked_senses", "related",
+           "shared_kind", "visible_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
 MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
@@ -42,11 +48,38 @@ def visible_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]
     return tuple(found)
 
 
+@lru_cache(maxsize=8192)
+def ranked_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]:
+    """All the word's visible senses (person senses as in `visible_senses`), the dominant first:
+    by how often each was tagged (`wordnet.sense_counts`), ties by the embedding similarity of
+    "a <word>" with "<lemma>: <gloss>" (WordNet's order without the model)."""
+    found = wordnet.senses(word)
+    counts = wordnet.sense_counts(word)
+    ranked = [(counts[i] if i < len(counts) else 0, i, s) for i, s in enumerate(found)
+              if s.lexfile in wordnet.PHYSICAL_LEXFILES]
+    if not person or any(s.lexfile != "person" for _, _, s in ranked):
+        ranked = [r for r in ranked if r[2].lexfile != "person"]
+    top = max((c for c, _, _ in ranked), default=0)
+    near = _gloss_nearness(word, [(i, s) for c, i, s in ranked if c == top])
+    ranked.sort(key=lambda r: (-r[0], -near.get(r[1], 0.0), r[1]))
+    return tuple(s for _, _, s in ranked)
+
+
+def _gloss_nearness(word: str, tied: list[tuple[int, wordnet.Synset]]) -> dict[int, float]:
+    """Sense number -> embedding similarity of "a <word>" with "<lemma>: <gloss>", for senses tied
+    in count ({} for fewer than two, or without the model)."""
+    if len(tied) < 2 or not embeddings.is_available():
+        return {}
+    vecs = embeddings.embed([f"a {word}"] + [f"{s.lemmas[0].replace('_', ' ')}: {s.gloss.split(';')[0]}"
+                                             for _, s in tied])
+    return {i: float(v @ vecs[0]) for (i, _), v in zip(tied, vecs[1:])}
+
+
 @lru_cache(maxsize=256)
 def _category_senses(category: str) -> frozenset[int]:
     if category == "person":                            # person.n.01 sits at the top of WordNet
         return frozenset(s.offset for s in wordnet.senses(category, 1))
-    senses = visible_senses(category, person=category in PERSON_CATEGORIES)
+    senses = ranked_senses(category, person=category in PERSON_CATEGORIES)[:SENSES]
     if any(s.lexfile == "animal" for s in senses):      # "bird" the animal, not its meat
         senses = tuple(s for s in senses if s.lexfile != "food")
     return frozenset(s.offset for s in senses)
@@ -59,7 +92,8 @@ def _closure(offset: int) -> dict[int, int]:
 
 
 def _noun_senses(noun: str) -> tuple[wordnet.Synset, ...]:
-    return visible_senses(noun) or visible_senses(singular(noun))
+    """The noun's `SENSES` first ranked senses (its singular's when it has none)."""
+    return (ranked_senses(noun) or ranked_senses(singular(noun)))[:SENSES]
 
 
 def kind_category(noun: str, categories: Iterable[str]) -> str | None:
@@ -75,9 +109,10 @@ def kind_category(noun: str, categories: Iterable[str]) -> str | None:
 
 
 def _text_senses(text: str) -> tuple[wordnet.Synset, ...]:
+    """A candidate name's dominant sense: of the whole name when WordNet knows it, else of its head."""
     words = re.findall(r"[a-z]+", text.lower())
-    whole = visible_senses(" ".join(words)) if len(words) > 1 else ()
-    return whole or visible_senses(head_word(text))
+    whole = ranked_senses(" ".join(words)) if len(words) > 1 else ()
+    return (whole or ranked_senses(head_word(text)))[:1]
 
 
 def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | None:
@@ -119,17 +154,24 @@ def _meaningful(offset: int) -> bool:
     return s is not None and not (set(s.lemmas) & GENERIC_KINDS)
 
 
-def shared_kind(noun: str, text: str | None = None, category: str | None = None) -> tuple[int, str] | None:
+def noun_sense_count(noun: str) -> int:
+    """How many of the noun's senses `shared_kind(..., sense=)` can be asked about (0: unknown)."""
+    return len(_noun_senses(noun)) if wordnet.available() else 0
+
+
+def shared_kind(noun: str, text: str | None = None, category: str | None = None,
+                sense: int = 0) -> tuple[int, str] | None:
     """How close a candidate (an asset's name `text`, or a generator `category`) is in kind to the
-    noun: (steps from the noun's most frequent visible sense up to the nearest meaningful sense both
+    noun: (steps from the noun's ranked visible sense number `sense` (0: the dominant one) up to
+    the nearest meaningful sense both
     are kinds of, that sense's first lemma), or None when they share none (`GENERIC_KINDS` do not
     count) or WordNet does not know either."""
     if not wordnet.available():
         return None
     mine = _noun_senses(noun)
-    if not mine:
+    if len(mine) <= sense:
         return None
-    up = _closure(mine[0].offset)
+    up = _closure(mine[sense].offset)
     theirs = [s.offset for s in (_text_senses(text) if text is not None else ())]
     if category is not None:
         theirs += sorted(_category_senses(category))

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import embeddings
+from . import embeddings, hypernyms
 from .hypernyms import head_word
 from .vocabulary import singular
 
@@ -41,7 +41,8 @@ SHAPES: dict[str, tuple[str, ...]] = {
 }
 _WORD_TO_SHAPE = {w: s for s, words in SHAPES.items() for w in words}
 
-CandidateTable = Callable[[], tuple[list[str], list[str], np.ndarray]]   # -> labels, texts, vectors [N, D]
+# -> labels, texts, vectors [N, D], and optionally the words tagging each candidate [N] (an asset's tags)
+CandidateTable = Callable[[], tuple]
 _tables: dict[str, CandidateTable] = {}
 _lock = threading.Lock()
 _shape_table: list[np.ndarray] = []
@@ -80,14 +81,22 @@ def _shape_vectors() -> np.ndarray:
 
 
 def _all_candidates() -> tuple[list[str], list[str], np.ndarray]:
+    labels, texts, vecs, _ = _all_tagged()
+    return labels, texts, vecs
+
+
+def _all_tagged() -> tuple[list[str], list[str], np.ndarray, list[tuple[str, ...]]]:
+    """Every candidate: labels, texts, vectors [N, D] and tags (empty for shapes and untagged tables)."""
     labels, texts, vecs = list(SHAPES), [f"a {s}" for s in SHAPES], [_shape_vectors()]
+    tags: list[tuple[str, ...]] = [() for _ in SHAPES]
     for table in list(_tables.values()):
-        lab, txt, v = table()
+        lab, txt, v, *rest = table()
         if len(lab):
             labels += lab
             texts += txt
             vecs.append(np.asarray(v, dtype=np.float32))
-    return labels, texts, np.concatenate(vecs)
+            tags += [tuple(t) for t in rest[0]] if rest else [() for _ in lab]
+    return labels, texts, np.concatenate(vecs), tags
 
 
 def nearest_candidates(phrase: str, k: int = 5) -> list[OpenMatch]:
@@ -100,8 +109,10 @@ def nearest_candidates(phrase: str, k: int = 5) -> list[OpenMatch]:
 
 
 def _words(text: str) -> set[str]:
+    """The text's words with their singulars: crude ("sunglasses" -> "sunglasse") and the
+    vocabulary's ("sunglasses" -> "sunglass")."""
     words = set(re.findall(r"[a-z0-9]+", text.lower()))
-    return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")}
+    return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")} | {singular(w) for w in words}
 
 
 def ground_open(phrase: str, floor: float = OPEN_FLOOR) -> OpenMatch | None:
@@ -124,21 +135,58 @@ def has_assets() -> bool:
 
 
 def _compact(text: str) -> str:
-    return "".join(re.findall(r"[a-z]+", text.lower()))
+    """The text's letters, each word singular ("Sun glasses" and "sunglass" -> "sunglass")."""
+    return "".join(singular(w) for w in re.findall(r"[a-z]+", text.lower()))
+
+
+# a name "<noun> <head>" shows the noun when both words are artifacts (WordNet's lexicographer file)
+# and this similar: "Chandelier lamp" (0.53) for "chandelier", not "Dog house" or "Spider plant"
+APPOSITION_FLOOR = 0.5
+# an asset tag names it ("nightstand" on "Bedside table") when at most this many candidates carry it
+# and the noun is this similar to the candidate's name
+RARE_TAG = 3
+TAG_NAME_FLOOR = 0.6
+
+
+def _appositive(noun: str, text: str) -> bool:
+    """Whether `text` is "... <noun> <head>" with `head` a near-synonym of the noun's kind."""
+    words = re.findall(r"[a-z]+", text.lower())
+    if len(words) < 2 or singular(words[-2]) != singular(noun) or "with" in words:
+        return False
+    mine, theirs = hypernyms.ranked_senses(singular(noun))[:1], hypernyms.ranked_senses(singular(words[-1]))[:1]
+    if not mine or not theirs or not mine[0].lexfile == theirs[0].lexfile == "artifact":
+        return False   # only made things: "Orange juice", "Tomato sauce", "Peach blossom" are not the noun
+    v = embeddings.embed([f"a {noun}", f"a {words[-1]}"])
+    return float(v[0] @ v[1]) >= APPOSITION_FLOOR
+
+
+def _tag_named(noun: str, texts: list[str], tags: list[tuple[str, ...]], vecs: np.ndarray) -> list[int]:
+    """Candidates a rare tag equal to the noun names, when the noun is close to their name."""
+    want = {noun, singular(noun)}
+    hits = [i for i, t in enumerate(tags) if want & {x.lower() for x in t}]
+    if not hits or len(hits) > RARE_TAG:
+        return []
+    sims = vecs[hits] @ embeddings.embed([f"a {noun}"])[0]
+    return [i for i, s in zip(hits, sims) if float(s) >= TAG_NAME_FLOOR]
 
 
 def ground_named(noun: str) -> OpenMatch | None:
     """The candidate named by the noun: its name is the noun ("Bunkbed" for "bunk bed"), or the
     noun's words are words of its name and its last word is the name's head noun ("Electric
-    guitar" for "guitar", not "Spider plant" for "spider"); an exact name first, then the most
-    similar. None if none."""
+    guitar" for "guitar", not "Spider plant" for "spider"), or the noun is the name's modifier and
+    its head a near-synonym of the same kind ("Chandelier lamp", `_appositive`), or a rare tag of
+    the candidate is the noun ("nightstand" on "Bedside table", `_tag_named`); an exact name first,
+    then the most similar. None if none."""
     words = re.findall(r"[a-z0-9]+", noun.lower())
     if not words:
         return None
-    labels, texts, vecs = _all_candidates()
+    labels, texts, vecs, tags = _all_tagged()
     want, head, compact = _words(noun), singular(words[-1]), _compact(noun)
     exact = [i for i, t in enumerate(texts) if _compact(t) == compact]
     named = exact or [i for i, t in enumerate(texts) if want <= _words(t) and head_word(t) == head]
+    if not named and len(words) == 1:
+        named = [i for i, t in enumerate(texts) if words[0] in _words(t) and _appositive(words[0], t)]
+        named = named or _tag_named(words[0], texts, tags, vecs)
     if not named:
         return None
     sims = vecs[named] @ embeddings.embed([f"a {noun}"])[0]

@@ -15,7 +15,8 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["DEFAULT_DIR", "PHYSICAL_LEXFILES", "Synset", "available", "hypernym_closure", "senses", "synset"]
+__all__ = ["DEFAULT_DIR", "PHYSICAL_LEXFILES", "Synset", "available", "hypernym_closure", "sense_counts", "senses",
+           "synset"]
 
 DEFAULT_DIR = "/usr/share/wordnet"
 ENV_VAR = "MORPHOSIM_WORDNET"
@@ -41,6 +42,7 @@ class Synset:
 _lock = threading.Lock()
 _state: dict[str, bytes] = {}
 _synsets: dict[int, Synset] = {}
+_counts: dict[str, dict[str, dict[int, int]]] = {}
 
 
 def _folder() -> Path:
@@ -112,11 +114,45 @@ def synset(offset: int) -> Synset | None:
 
 
 def senses(noun: str, limit: int | None = None) -> list[Synset]:
-    """The noun's senses, most frequent first ("fire hydrant" is looked up as "fire_hydrant")."""
+    """The noun's senses, most frequent first ("fire hydrant" is looked up as "fire_hydrant", else
+    as "fire-hydrant": "go kart" is WordNet's "go-kart")."""
     key = "_".join(noun.strip().lower().split())
     line = _index_line(key) if key else None
+    if line is None and "_" in key:
+        line = _index_line(key.replace("_", "-"))
     offsets = _offsets(line) if line else ()
     return [s for s in (synset(o) for o in offsets[:limit]) if s is not None]
+
+
+def _counts_table() -> dict[str, dict[int, int]]:
+    """`cntlist.rev` read once: noun lemma -> {sense number (1 = first in `index.noun`): times tagged}."""
+    with _lock:
+        if "counts" not in _counts:
+            table: dict[str, dict[int, int]] = {}
+            try:
+                text = (_folder() / "cntlist.rev").read_text(encoding="latin-1")
+            except OSError:
+                text = ""
+            for line in text.splitlines():
+                parts = line.split()
+                lemma, _, rest = parts[0].partition("%") if len(parts) == 3 else ("", "", "")
+                if rest.startswith("1:") and parts[1].isdigit() and parts[2].isdigit():
+                    table.setdefault(lemma.lower(), {})[int(parts[1])] = int(parts[2])
+            _counts["counts"] = table
+        return _counts["counts"]
+
+
+def sense_counts(noun: str) -> tuple[int, ...]:
+    """How often each of the noun's senses (in `senses` order) was tagged in WordNet's corpus
+    (`cntlist.rev`; 0 for untagged senses, all 0 without the file)."""
+    key = "_".join(noun.strip().lower().split())
+    line = _index_line(key) if key else None
+    if line is None and "_" in key:
+        key = key.replace("_", "-")
+        line = _index_line(key)
+    n = len(_offsets(line)) if line else 0
+    counts = _counts_table().get(key, {})
+    return tuple(counts.get(i + 1, 0) for i in range(n))
 
 
 def hypernym_closure(sense: Synset) -> dict[int, int]:

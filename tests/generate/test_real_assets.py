@@ -108,3 +108,10 @@ def test_envs_see_the_sky_and_the_vector_env_matches_single_envs(real):
         np.testing.assert_array_equal(vo["rgb"][i], singles[i])
     venv.close()
     env.close()
+
+
+def test_category_candidates_need_the_category_as_head_noun(real):
+    # "Dog house" names a house and "Hot dog" (a compound WordNet knows) a food: neither is a dog
+    names = {r.name.lower() for r in asset_candidates("dog")}
+    assert "dog" in names and "dog house" not in names and "hot dog" not in names
+    assert not any("cake" in r.name.lower() for r in asset_candidates("cup"))

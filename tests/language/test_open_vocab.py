@@ -119,3 +119,40 @@ def test_zero_ad_animals_resolve_by_name(real):
         pytest.skip("needs Debian 0ad-data")
     for noun in ("tiger", "whale", "giraffe", "polar bear"):
         assert parse(f"a {noun}").objects[0].category.startswith("asset:zero_ad/"), noun
+
+
+def _first(text):
+    return parse(text).objects[0]
+
+
+@pytest.mark.parametrize("text, name", [("a pair of sunglasses", "sunglasses"), ("a sunglasses", "sunglasses"),
+                                        ("a chandelier", "chandelier lamp"), ("a nightstand", "bedside table")])
+def test_assets_named_by_plural_apposition_or_tag(real, text, name):
+    # a plural name, a "<noun> <near-synonym>" name, a rare tag: the asset the noun names, not a stand-in
+    from morphosim_gym.generate.real_assets import asset_index
+    o = _first(text)
+    assert o.grounding == "open" and o.category.startswith("asset:")
+    assert asset_index().get(o.category[len("asset:"):]).name.lower() == name
+
+
+def test_modifier_names_are_not_the_noun(real):
+    from morphosim_gym.language import open_vocab
+    # "Dog house", "Spider plant", "Coffee machine", "Red orange juice", "Tomato sauce" are other things
+    for noun in ("dog", "spider", "coffee", "orange", "tomato", "peach"):
+        hit = open_vocab.ground_named(noun)
+        assert hit is None or hit.text.lower().split()[-1].rstrip("s") == noun
+
+
+def test_a_synonym_at_distance_zero_is_a_checked_match(real, monkeypatch):
+    monkeypatch.delenv("MORPHOSIM_GROUNDING", raising=False)
+    o = _first("a toilet")          # WordNet: toilet = lavatory, so "Small lavatory" is no stand-in
+    assert o.grounding != "kind" and "lavatory" in o.category
+
+
+def test_dominant_sense_picks_the_stand_in(real, monkeypatch):
+    monkeypatch.delenv("MORPHOSIM_GROUNDING", raising=False)
+    from morphosim_gym.generate.real_assets import asset_index
+    o = _first("a turtle")          # the reptile (a crocodile stands in), never the turtleneck (a helmet)
+    name = asset_index().get(o.category[len("asset:"):]).name.lower() if o.category.startswith("asset:") else ""
+    assert "helmet" not in name and o.category != "tree"
+    assert _first("a mango").category != "tree"

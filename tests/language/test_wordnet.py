@@ -60,3 +60,33 @@ def test_related():
     assert hypernyms.related("kettle", "Teapot") is False
     assert hypernyms.related("rake", "Tool") is False              # too general to show a rake
     assert hypernyms.related("florbnax", "Tool") is None
+
+
+@needs_wordnet
+def test_sense_counts_and_hyphenated_compounds():
+    assert wordnet.sense_counts("dog")[0] > 0 and len(wordnet.sense_counts("dog")) == len(wordnet.senses("dog"))
+    assert wordnet.sense_counts("florbnax") == ()
+    assert wordnet.senses("go kart")                  # WordNet's "go-kart"
+
+
+@needs_wordnet
+@pytest.mark.parametrize("word, lexfile, gloss_word", [("turtle", "animal", "reptile"), ("mango", "food", "fruit"),
+                                                       ("monitor", "artifact", "display"),
+                                                       ("peacock", "animal", "peafowl")])
+def test_dominant_sense_beats_wordnet_order(word, lexfile, gloss_word):
+    # WordNet lists the turtleneck, the mango tree, the warship and the peacock butterfly first (all
+    # untagged or tagged equally often); the dominant sense is the one a person means
+    top = hypernyms.ranked_senses(word)[0]
+    assert top.lexfile == lexfile and gloss_word in top.gloss
+
+
+@needs_wordnet
+def test_fruit_is_not_its_tree():
+    assert hypernyms.kind_category("mango", CATEGORIES) != "tree"
+
+
+@needs_wordnet
+def test_a_candidate_is_read_through_its_dominant_sense():
+    # "Peacock" is the bird: it shares nothing meaningful with a spider (not "arthropod" via the butterfly)
+    assert hypernyms.shared_kind("spider", text="Peacock") is None
+    assert hypernyms.shared_kind("turtle", text="Helmet") is None          # the reptile, not the turtleneck

@@ -24,6 +24,7 @@ from ..lexicon import (
     VERBS,
     VIEWERS,
 )
+from .. import hypernyms, wordnet
 from ..vocabulary import CATEGORIES, noun_to_category, word_to_setting
 from .tokens import NUMBER_PHRASES, SIZE_PHRASES, is_adverb, known_word, match_phrase, number_at, stop_word
 
@@ -195,6 +196,8 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
     if not stop_word(w) or (w in SPEED_WORDS_1 and nxt is not None and not stop_word(nxt)):
         return False
     after = toks[j + 2] if j + 2 < len(toks) else None
+    if _noun_not_verb(w, nxt, np_, [toks[k] for k in collected]):
+        return False
     if np_.det is not None and w in VERBS and nxt is not None and not stop_word(nxt) and not known_word(nxt) \
             and (after in VERBS or after in AUX):
         return False  # a verb-like word of an unknown compound noun before its verb: "a red go kart moves"
@@ -205,6 +208,21 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
         if collected and (nxt is None or nxt in VERBS or nxt in AUX):
             return False
     return True
+
+
+def _noun_not_verb(w: str, nxt: str | None, np_: NounPhrase, collected: list[str]) -> bool:
+    """A stop word that is a noun here: the second word of a compound noun WordNet knows ("a frying
+    pan", not the camera's pan), or a verb that is a visible thing alone after an article ("a swing",
+    "a swing sways")."""
+    if collected and compound_noun(collected[-1], w):
+        return True
+    return bool(np_.det is not None and not collected and w in VERBS and (nxt is None or nxt in VERBS or nxt in AUX)
+                and hypernyms.ranked_senses(w))
+
+
+def compound_noun(first: str, second: str) -> bool:
+    """Whether the two words are a compound noun WordNet knows ("frying pan", "go kart" as "go-kart")."""
+    return first.isalpha() and second.isalpha() and bool(wordnet.senses(f"{first} {second}", 1))
 
 
 def _size_or_speed(toks: Sequence[str], j: int, np_: NounPhrase) -> int:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from ...errors import CommandError
@@ -11,6 +12,7 @@ from ..plan import CameraSpec, EditOp, MotionSpec, ObjectSpec, Plan
 from ..sequence import motion_stages
 from ..vocabulary import CATEGORIES, DEFAULT_SETTING
 from .describe import DescriptionReader, ObjectDraft
+from .nouns import compound_noun
 from .segments import camera_decl_to_edit, classify, split_segments
 from .targets import TargetResolver
 from .tokens import detok, known_word, tokenize
@@ -41,7 +43,8 @@ class RuleParser(DescriptionReader, TargetResolver):
     # ---- entry -------------------------------------------------------------------------------------
     def parse(self) -> Plan:
         toks = tokenize(self.text)
-        toks = [self._fix_typo(w, toks[k + 1] if k + 1 < len(toks) else None) for k, w in enumerate(toks)]
+        toks = [w if _in_compound_noun(toks, k) else self._fix_typo(w, toks[k + 1] if k + 1 < len(toks) else None)
+                for k, w in enumerate(toks)]
         segments = split_segments(toks)
         if not segments:
             raise CommandError(f"Could not understand {self.text!r}: no words found. Try e.g. " + ", ".join(EXAMPLES))
@@ -98,6 +101,12 @@ class RuleParser(DescriptionReader, TargetResolver):
                     camera=self.camera or CameraSpec(), setting=setting, setting_source=source, then=then)
         motion_stages(plan)        # a second stage ("... then stops") must continue a motion: refused here if not
         return plan
+
+
+def _in_compound_noun(toks: Sequence[str], k: int) -> bool:
+    """Whether word k and a neighbour form a compound noun WordNet knows ("frying pan", "go kart"):
+    then it is no typo of a parser word ("flying", "dart")."""
+    return any(compound_noun(*toks[j:j + 2]) for j in (k - 1, k) if j >= 0 and j + 1 < len(toks))
 
 
 def parse_rules(text: str, scene: Any = None, require_scene: bool = False) -> Plan:
