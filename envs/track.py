@@ -104,8 +104,9 @@ class TrackEnv(MorphoSimEnv):
     Reset options: `prompt`, `scene_seed`, `target`, `edits` (language edits applied
     before the episode), `camera` (`position`, `look_at`, `fov_y_deg` of the tripod camera),
     `on_edit_error`. `env.unwrapped.perturb(text)` edits the scene mid-episode; a camera edit
-("widen the field of view", "raise the camera by 0.5 metres") moves the tripod with the scene's
-camera (pan and tilt kept) and scales the zoom from the next observation on.
+    ("widen the field of view", "raise the camera by 0.5 metres") moves the tripod with the scene's
+    camera (pan and tilt kept) and scales the zoom from the next observation on;
+    `env.unwrapped.move_camera(camera)` moves it as the reset `camera` option would.
 
     Branching an episode: `snap = env.unwrapped.snapshot()` saves the episode's state (world,
     rig, task counters, edit log, numpy RNG; the immutable scene is shared, not copied, so it
