@@ -4,8 +4,10 @@ Each run of one object's Gaussians (contiguous, one object id, at least `MIN_RUN
 once, a ladder of coarser sets: level k merges the Gaussians whose centres fall in one cube of
 side `cell_k = base * 2**k` (base: the run's median largest scale) into one Gaussian by moment
 matching (weights w = opacity x mean face area: the weighted mean, the weighted covariance of
-the members' covariances plus their spread, the weighted colour and features, and the opacity
-that keeps the summed coverage o * area, at most 0.99 and at most the union 1 - prod(1 - o)).
+the members' covariances plus their spread, the weighted colour and features). The coverage mass
+o * 2 pi * area is kept: the members' sum, at most that of the uniform patch of the merged
+variance (coverage cannot pass 1); first by the opacity (at most 0.99 and at most the union
+1 - prod(1 - o)), then, once that is capped, by widening the merged Gaussian.
 Per view, a run draws the coarsest level whose cell projects to at most `tol` pixels at the
 run's nearest point (`cell_k * f / z_min <= tol`, z_min: camera depth of the nearest point of
 its bounding sphere), else its full detail: the choice follows distance, and the merged
@@ -122,10 +124,14 @@ def merge_cells(means, quats, scales, opacities, colors, features, cell: float) 
     C = wmean(second).reshape(M, 3, 3)
     evals, evecs = np.linalg.eigh(C)
     evecs[np.linalg.det(evecs) < 0, :, 0] *= -1.0
-    e = np.sqrt(np.maximum(evals, (1e-3 * cell) ** 2))
+    e = np.sqrt(np.maximum(evals, 1e-14))          # eigh may return tiny negatives
     m_area = (e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 0] * e[:, 2]) / 3.0
     union = 1.0 - np.exp(np.bincount(inv, np.log1p(-np.minimum(o, 0.999999)), M))
-    op = np.minimum(np.minimum(wsum / m_area, union), 0.99)
+    # coverage mass o * 2 pi * area: the members' sum, at most the variance-matched uniform patch's
+    # area (12 x area, coverage <= 1); kept by the opacity, then by widening once it is capped
+    mass = np.minimum(2.0 * np.pi * wsum, 12.0 * m_area)
+    op = np.minimum(np.minimum(mass / (2.0 * np.pi * m_area), union), 0.99)
+    e = e * np.sqrt(np.maximum(mass / (2.0 * np.pi * op * m_area), 1.0))[:, None]
     f32 = np.float32
     return {"means": m.astype(f32), "quats": _quats_of(evecs).astype(f32), "scales": e.astype(f32),
             "opacities": op.astype(f32), "colors": np.clip(wmean(np.asarray(colors, np.float64)), 0, 1).astype(f32),
