@@ -7,6 +7,7 @@ Run from the repository root:
     python benchmarks/render.py --quick          # short run (~1.5 min)
     python benchmarks/render.py --json out.json  # also write the results as JSON
     python benchmarks/render.py --lod-only       # only the level-of-detail rows (~2 min)
+    python benchmarks/render.py --lod-envs       # real-asset Track/Reach/Find, render_lod off vs on
 
 What is measured (single process, numba on all cores, camera orbiting 0.5 degrees per frame
 around the scene so every frame re-projects and re-sorts):
@@ -468,6 +469,44 @@ def bench_lod(scene: dict, res: int, frames: int, rounds: int = 5, tols=(1.0, 2.
     return out
 
 
+def bench_lod_envs(env_ids=("MorphoSim/Track-v0", "MorphoSim/Reach-v0", "MorphoSim/Find-v0"),
+                   modes=("single", "vector-8"), steps: int = 300, rounds: int = 3) -> list[dict]:
+    """Env steps/s with `render_lod` off and on, on the real-asset scenes (default env arguments,
+    84 px, scene_pool=8, random actions): both envs built once, rollouts alternated in `rounds`
+    rounds; per-round ratios (lod / full), median."""
+    import gymnasium as gym
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from _envs_common import scene_kwargs, single_rollout, vector_rollout
+
+    from morphosim_gym.envs import make_vec
+
+    rows = []
+    for env_id in env_ids:
+        for mode in modes:
+            envs = {}
+            for lod in (False, True):
+                kw = dict(scene_pool=8, render_lod=lod, **scene_kwargs("real"))
+                envs[lod] = gym.make(env_id, **kw) if mode == "single" else make_vec(env_id, 8, "vector", **kw)
+            rates = {False: [], True: []}
+            for _ in range(rounds):
+                for lod, env in envs.items():
+                    if mode == "single":
+                        rates[lod].append(steps / single_rollout(env, steps))
+                    else:
+                        rates[lod].append(8 * (steps // 8) / vector_rollout(env, steps // 8))
+            for env in envs.values():
+                env.close()
+            ratios = [b / a for a, b in zip(rates[False], rates[True])]
+            rows.append({"id": env_id, "mode": mode, "full_steps_s": float(np.median(rates[False])),
+                         "lod_steps_s": float(np.median(rates[True])), "ratio_median": float(np.median(ratios)),
+                         "ratios": ratios})
+            r = rows[-1]
+            print(f"{env_id:22s} {mode:9s} full {r['full_steps_s']:7.1f} steps/s, lod {r['lod_steps_s']:7.1f}, "
+                  f"ratio {r['ratio_median']:.2f}x (rounds {', '.join(f'{x:.2f}' for x in ratios)})", flush=True)
+    return rows
+
+
 def jit_times(with_grad: bool) -> dict:
     """Cold (empty NUMBA_CACHE_DIR) and warm (same cache, new process) first-frame times."""
     code = _JIT_PROBE.format(root=str(ROOT), bench_dir=str(Path(__file__).resolve().parent), with_grad=with_grad)
@@ -498,6 +537,9 @@ def main(argv=None) -> dict:
     ap.add_argument("--no-yardsticks", action="store_true", help="skip MuJoCo and the torch reference")
     ap.add_argument("--lod-only", action="store_true",
                     help="only the level-of-detail rows (200k surface scene, 128 px, alternating rounds)")
+    ap.add_argument("--lod-envs", action="store_true",
+                    help="only (or with --lod-only: also) Track/Reach/Find on real-asset scenes, single and "
+                         "vector-8, render_lod off vs on")
     ap.add_argument("--max-wait", type=float, default=60.0,
                     help="before each case wait up to this many seconds for other processes to go idle "
                          "(0: never wait); the load seen during each case is reported either way")
@@ -527,10 +569,13 @@ def main(argv=None) -> dict:
         print("JIT probe (subprocesses, cold then warm numba cache) ...", flush=True)
         results["jit"] = jit_times(with_grad=not quick)
 
-    if args.lod_only:
-        settle()
-        results["lod"] = [bench_lod(surface_scene(200_000), 128, 20 if quick else 40)]
-        _print_lod(results["lod"])
+    if args.lod_only or args.lod_envs:
+        if args.lod_only:
+            settle()
+            results["lod"] = [bench_lod(surface_scene(200_000), 128, 20 if quick else 40)]
+            _print_lod(results["lod"])
+        if args.lod_envs:
+            results["lod_envs"] = bench_lod_envs(steps=150 if quick else 300)
         if args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps(results, indent=2, default=float))

@@ -101,7 +101,7 @@ def render(
     single = isinstance(camera, Camera)
     cams = [camera] if single else list(camera)
     viewmats, Ks, nears, width, height = cameras_to_arrays(cams)
-    if lod and backend == "cpu" and not g.is_torch:
+    if lod and backend == "cpu" and not g.is_torch and _lod_changes(source, t, cams, lod_tol):
         parts = list(source) if isinstance(source, (list, tuple)) else [source]
         outs = render_batch([(parts, c, background, sky) for c in cams], t, features=features, lod=True,
                             lod_tol=lod_tol)
@@ -129,6 +129,16 @@ def render(
     if single:
         out = {k: (None if v is None else v[0]) for k, v in out.items()}
     return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
+
+
+def _lod_changes(source: Source, t: float, cams: Sequence[Camera], tol: float) -> bool:
+    """Whether level of detail would draw any part of `source` coarser from any of these cameras
+    (if not, `render` takes its exact path: same images, no batching cost)."""
+    from .lod import lod_parts
+
+    parts = _source_parts(source, t, None)[0]
+    return any(len(got) != len(parts) or any(a is not b for a, b in zip(got, parts))
+               for got in (lod_parts(parts, c.world_to_camera, c.K, c.near, tol) for c in cams))
 
 
 View = tuple   # (source, camera), (source, camera, background) or (source, camera, background, sky)

@@ -60,12 +60,14 @@ class RunLod:
     """One object run lo:hi (object id `oid`): its spatial blocks' ladders and the anchors (local
     indices and their positions when built) that track its rigid motion."""
 
-    __slots__ = ("lo", "hi", "oid", "blocks", "anchors", "anchor_pos", "size")
+    __slots__ = ("lo", "hi", "oid", "blocks", "anchors", "anchor_pos", "size", "min_cell")
 
     def __init__(self, lo: int, hi: int, oid: int, blocks: list, anchors: np.ndarray, anchor_pos: np.ndarray,
                  size: float) -> None:
         self.lo, self.hi, self.oid, self.blocks = lo, hi, oid, blocks
         self.anchors, self.anchor_pos, self.size = anchors, anchor_pos, size
+        self.min_cell = min((b.cells[1] for b in blocks if len(b.cells) > 1), default=np.inf)
+        """The finest coarse cell of any block: a run nearer than min_cell * f / tol keeps full detail."""
 
 
 def _rotmats(quats: np.ndarray) -> np.ndarray:
@@ -324,7 +326,11 @@ def lod_parts(parts: Sequence[Any], viewmat, K, near: float, tol: float = LOD_TO
         pieces: list = []
         idx = np.concatenate([o.lo + o.anchors for o in ladders])
         now = np.asarray(part.means[idx], np.float64).reshape(len(ladders), N_ANCHORS, 3)
-        for k, run in enumerate(ladders):
+        vm = np.asarray(viewmat, np.float64)
+        far = (now @ vm[2, :3] + vm[2, 3]).max(axis=1) + [o.size for o in ladders]   # >= any point's depth
+        reach = np.array([o.min_cell for o in ladders]) * float(max(K[0][0], K[1][1])) / tol
+        for k in np.flatnonzero(far >= reach):       # the others are too near for any coarse level
+            run = ladders[k]
             fit = _fit_rigid(run.anchor_pos, now[k], run.size)
             if fit is None:
                 continue

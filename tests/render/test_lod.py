@@ -122,6 +122,8 @@ def test_far_objects_drawn_coarser_near_ones_exact_and_labels_kept():
     d = render_batch([(solo, cam)], lod=True)[0]
     np.testing.assert_array_equal(c.rgb, d.rgb)
     np.testing.assert_array_equal(c.instance, d.instance)
+    f = render(solo, cam, lod=True)          # `render` takes its exact path when nothing is coarse
+    np.testing.assert_array_equal(f.rgb, render(solo, cam).rgb)
     # `render` with lod: the same as the batched call
     e = render(g, cam, lod=True)
     np.testing.assert_array_equal(e.rgb, b.rgb)
