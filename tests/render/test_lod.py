@@ -197,3 +197,40 @@ def test_error_bounded_on_a_real_asset_scene():
         assert _psnr(a.rgb, b.rgb) >= PSNR_MIN_DB
         assert set(np.unique(a.instance)) == set(np.unique(b.instance))
         assert (a.instance == b.instance).mean() > 0.99
+
+
+def test_env_render_lod_switch_reaches_the_renderer(monkeypatch):
+    """`render_lod` (off by default) is passed to the single env's render and the native vector
+    env's batched render."""
+    import gymnasium as gym
+
+    import morphosim_gym as ms
+    import morphosim_gym.envs.core as core
+    import morphosim_gym.envs.native_vector as native
+    from morphosim_gym.envs import make_vec
+
+    seen = []
+
+    def spy(real):
+        def call(*args, **kwargs):
+            seen.append(kwargs.get("lod"))
+            return real(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(core, "render_scene", spy(core.render_scene))
+    monkeypatch.setattr(native, "render_batch", spy(native.render_batch))
+    fast = dict(width=32, height=32, sim=ms.SimConfig(reconstruction="oracle",
+                                                      generation=ms.GenerationConfig(detail=0.25)))
+    for lod in (False, True):
+        seen.clear()
+        env = gym.make("MorphoSim/Track-v0", render_lod=lod, **fast)
+        assert env.unwrapped.config.render_lod is lod
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+        env.close()
+        venv = make_vec("MorphoSim/Track-v0", 2, vectorization_mode="vector", render_lod=lod, **fast)
+        venv.reset(seed=0)
+        venv.step(venv.action_space.sample())
+        venv.close()
+        assert seen and set(seen) == {lod}
+    assert gym.make("MorphoSim/Track-v0", **fast).unwrapped.config.render_lod is False
