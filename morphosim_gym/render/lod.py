@@ -315,36 +315,38 @@ def lod_parts(parts: Sequence[Any], viewmat, K, near: float, tol: float = LOD_TO
         raise ValueError(f"Expected an LOD tolerance > 0 pixels, found {tol!r}")
     out: list = []
     for part in parts:
-        if getattr(part, "object_ids", None) is None or not _cacheable(part):
-            out.append(part)
-            continue
-        ladders = _ladders(part)
-        if not ladders:
-            out.append(part)
-            continue
-        pos = 0
-        pieces: list = []
-        idx = np.concatenate([o.lo + o.anchors for o in ladders])
-        now = np.asarray(part.means[idx], np.float64).reshape(len(ladders), N_ANCHORS, 3)
-        vm = np.asarray(viewmat, np.float64)
-        far = (now @ vm[2, :3] + vm[2, 3]).max(axis=1) + [o.size for o in ladders]   # >= any point's depth
-        reach = np.array([o.min_cell for o in ladders]) * float(max(K[0][0], K[1][1])) / tol
-        for k in np.flatnonzero(far >= reach):       # the others are too near for any coarse level
-            run = ladders[k]
-            fit = _fit_rigid(run.anchor_pos, now[k], run.size)
-            if fit is None:
-                continue
-            levels = [choose_level(b, fit[0], fit[1], viewmat, K, near, tol) for b in run.blocks]
-            if not any(levels):
-                continue
-            if run.lo > pos:
-                pieces.append(_slice(part, pos, run.lo))
-            pieces.extend(_placed(run.oid, b, lv, *fit) for b, lv in zip(run.blocks, levels))
-            pos = run.hi
-        if not pieces:
-            out.append(part)
-            continue
-        if pos < len(part.colors):
-            pieces.append(_slice(part, pos, len(part.colors)))
-        out.extend(pieces)
+        pieces = None
+        if getattr(part, "object_ids", None) is not None and _cacheable(part):
+            pieces = _part_pieces(part, _ladders(part), viewmat, K, near, tol)
+        out.extend(pieces or [part])
     return out
+
+
+def _part_pieces(part: Any, ladders: list[RunLod], viewmat, K, near: float, tol: float) -> Optional[list]:
+    """One part's pieces for this view, or None when every run keeps full detail."""
+    if not ladders:
+        return None
+    idx = np.concatenate([o.lo + o.anchors for o in ladders])
+    now = np.asarray(part.means[idx], np.float64).reshape(len(ladders), N_ANCHORS, 3)
+    vm = np.asarray(viewmat, np.float64)
+    far = (now @ vm[2, :3] + vm[2, 3]).max(axis=1) + [o.size for o in ladders]   # >= any point's depth
+    reach = np.array([o.min_cell for o in ladders]) * float(max(K[0][0], K[1][1])) / tol
+    pos = 0
+    pieces: list = []
+    for k in np.flatnonzero(far >= reach):       # the others are too near for any coarse level
+        run = ladders[k]
+        fit = _fit_rigid(run.anchor_pos, now[k], run.size)
+        if fit is None:
+            continue
+        levels = [choose_level(b, fit[0], fit[1], viewmat, K, near, tol) for b in run.blocks]
+        if not any(levels):
+            continue
+        if run.lo > pos:
+            pieces.append(_slice(part, pos, run.lo))
+        pieces.extend(_placed(run.oid, b, lv, *fit) for b, lv in zip(run.blocks, levels))
+        pos = run.hi
+    if not pieces:
+        return None
+    if pos < len(part.colors):
+        pieces.append(_slice(part, pos, len(part.colors)))
+    return pieces
