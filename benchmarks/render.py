@@ -6,6 +6,8 @@ Run from the repository root:
     python benchmarks/render.py                  # full run (~5 min on 2 cores)
     python benchmarks/render.py --quick          # short run (~1.5 min)
     python benchmarks/render.py --json out.json  # also write the results as JSON
+    python benchmarks/render.py --lod-only       # only the level-of-detail rows (~2 min)
+    python benchmarks/render.py --lod-envs       # real-asset Track/Reach/Find, render_lod off vs on
 
 What is measured (single process, numba on all cores, camera orbiting 0.5 degrees per frame
 around the scene so every frame re-projects and re-sorts):
@@ -21,6 +23,9 @@ around the scene so every frame re-projects and re-sorts):
   renderer `rasterize_torch` (slow: a few frames at the same N, no gradient);
 * peak memory: tracemalloc peak of one forward frame (numpy buffers) and the process's
   ru_maxrss;
+* level of detail: `render_batch(..., lod=True)` against full detail on the 200k surface
+  scene at 128 px, alternating rounds (same-run ratios), its PSNR and instance-label agreement
+  over 12 orbit views, for lod_tol 1 and 2 px;
 * first-call JIT cost: a subprocess with NUMBA_CACHE_DIR pointed at an empty temp dir (cold),
   then a second subprocess with that cache (warm first frame).
 
@@ -422,6 +427,86 @@ print("JSON" + json.dumps(res))
 """
 
 
+def bench_lod(scene: dict, res: int, frames: int, rounds: int = 5, tols=(1.0, 2.0)) -> dict:
+    """Level of detail (`render_batch(..., lod=True)`) against full detail on one scene: FPS of
+    both measured alternately in `rounds` rounds of `frames` orbiting frames each (per-round
+    ratio, median), the one-off ladder build time, and the error (PSNR of rgb, share of equal
+    instance labels) over 12 orbit views, per tolerance in `tols` (pixels)."""
+    from morphosim_gym.render.api import render_batch
+    from morphosim_gym.render.lod import clear_lod_cache
+    from morphosim_gym.scene.gaussians import Gaussians
+
+    arrays = {k: np.array(v) for k, v in scene.items()}
+    for a in arrays.values():
+        a.setflags(write=False)                  # LOD caches ladders only for read-only arrays
+    g = Gaussians._trusted(**arrays)
+    render_batch([(g, orbit_camera(0, res))])     # compile
+    clear_lod_cache()
+    t0 = time.perf_counter()
+    render_batch([(g, orbit_camera(0, res))], lod=True)
+    build_s = time.perf_counter() - t0
+    out = {"res": res, "n": len(arrays["means"]), "build_s": build_s, "tols": []}
+    for tol in tols:
+        psnr, agree = [], []
+        for f in range(0, 720, 60):
+            cam = orbit_camera(f, res)
+            a = render_batch([(g, cam)])[0]
+            b = render_batch([(g, cam)], lod=True, lod_tol=tol)[0]
+            psnr.append(10 * math.log10(1.0 / max(float(np.mean((a.rgb - b.rgb) ** 2)), 1e-12)))
+            agree.append(float((a.instance == b.instance).mean()))
+        fps = {False: [], True: []}
+        for _ in range(rounds):
+            for lod in (False, True):
+                t0 = time.perf_counter()
+                for f in range(frames):
+                    render_batch([(g, orbit_camera(f, res))], lod=lod, lod_tol=tol)
+                fps[lod].append(frames / (time.perf_counter() - t0))
+        ratios = [b / a for a, b in zip(fps[False], fps[True])]
+        out["tols"].append({"tol_px": tol, "fps_full": float(np.median(fps[False])),
+                            "fps_lod": float(np.median(fps[True])), "ratio_median": float(np.median(ratios)),
+                            "ratios": ratios, "psnr_min_db": min(psnr), "psnr_median_db": float(np.median(psnr)),
+                            "instance_agree_min": min(agree)})
+    return out
+
+
+def bench_lod_envs(env_ids=("MorphoSim/Track-v0", "MorphoSim/Reach-v0", "MorphoSim/Find-v0"),
+                   modes=("single", "vector-8"), steps: int = 300, rounds: int = 3) -> list[dict]:
+    """Env steps/s with `render_lod` off and on, on the real-asset scenes (default env arguments,
+    84 px, scene_pool=8, random actions): both envs built once, rollouts alternated in `rounds`
+    rounds; per-round ratios (lod / full), median."""
+    import gymnasium as gym
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from _envs_common import scene_kwargs, single_rollout, vector_rollout
+
+    from morphosim_gym.envs import make_vec
+
+    rows = []
+    for env_id in env_ids:
+        for mode in modes:
+            envs = {}
+            for lod in (False, True):
+                kw = dict(scene_pool=8, render_lod=lod, **scene_kwargs("real"))
+                envs[lod] = gym.make(env_id, **kw) if mode == "single" else make_vec(env_id, 8, "vector", **kw)
+            rates = {False: [], True: []}
+            for _ in range(rounds):
+                for lod, env in envs.items():
+                    if mode == "single":
+                        rates[lod].append(steps / single_rollout(env, steps))
+                    else:
+                        rates[lod].append(8 * (steps // 8) / vector_rollout(env, steps // 8))
+            for env in envs.values():
+                env.close()
+            ratios = [b / a for a, b in zip(rates[False], rates[True])]
+            rows.append({"id": env_id, "mode": mode, "full_steps_s": float(np.median(rates[False])),
+                         "lod_steps_s": float(np.median(rates[True])), "ratio_median": float(np.median(ratios)),
+                         "ratios": ratios})
+            r = rows[-1]
+            print(f"{env_id:22s} {mode:9s} full {r['full_steps_s']:7.1f} steps/s, lod {r['lod_steps_s']:7.1f}, "
+                  f"ratio {r['ratio_median']:.2f}x (rounds {', '.join(f'{x:.2f}' for x in ratios)})", flush=True)
+    return rows
+
+
 def jit_times(with_grad: bool) -> dict:
     """Cold (empty NUMBA_CACHE_DIR) and warm (same cache, new process) first-frame times."""
     code = _JIT_PROBE.format(root=str(ROOT), bench_dir=str(Path(__file__).resolve().parent), with_grad=with_grad)
@@ -450,6 +535,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--json", type=Path, default=None, help="write results to this JSON file")
     ap.add_argument("--no-jit", action="store_true", help="skip the cold/warm JIT subprocess probes")
     ap.add_argument("--no-yardsticks", action="store_true", help="skip MuJoCo and the torch reference")
+    ap.add_argument("--lod-only", action="store_true",
+                    help="only the level-of-detail rows (200k surface scene, 128 px, alternating rounds)")
+    ap.add_argument("--lod-envs", action="store_true",
+                    help="only (or with --lod-only: also) Track/Reach/Find on real-asset scenes, single and "
+                         "vector-8, render_lod off vs on")
     ap.add_argument("--max-wait", type=float, default=60.0,
                     help="before each case wait up to this many seconds for other processes to go idle "
                          "(0: never wait); the load seen during each case is reported either way")
@@ -475,9 +565,21 @@ def main(argv=None) -> dict:
                      "fwd_frames": fwd_frames, "fwd_bwd_iters": fb_iters},
         "forward": [], "forward_backward": [], "torch_reference": [], "mujoco": [], "speedups": [],
     }
-    if not args.no_jit:
+    if not args.no_jit and not args.lod_only:
         print("JIT probe (subprocesses, cold then warm numba cache) ...", flush=True)
         results["jit"] = jit_times(with_grad=not quick)
+
+    if args.lod_only or args.lod_envs:
+        if args.lod_only:
+            settle()
+            results["lod"] = [bench_lod(surface_scene(200_000), 128, 20 if quick else 40)]
+            _print_lod(results["lod"])
+        if args.lod_envs:
+            results["lod_envs"] = bench_lod_envs(steps=150 if quick else 300)
+        if args.json:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(results, indent=2, default=float))
+        return results
 
     scenes = {}
     for n in sizes:
@@ -500,6 +602,9 @@ def main(argv=None) -> dict:
             results["forward_backward"].append(dict(scene=kind, n=n, res=res, **r))
             print(f"fwd+bwd  {kind:12s} N={n:>7,d} {res:>3d}px  {r['its']:7.1f} it/s ({r['ms']:.2f} ms; "
                   + ", ".join(f"{k} {v:.2f}" for k, v in r["stages_ms"].items()) + ")", flush=True)
+
+    settle()
+    results["lod"] = [bench_lod(scenes[("surface", 200_000)], 128, 20 if quick else 40)]
 
     if not args.no_yardsticks:
         for res in resolutions:
@@ -552,11 +657,23 @@ def main(argv=None) -> dict:
     results["settings"]["waited_for_quiet_s"] = float(sum(waited))
 
     _print_tables(results)
+    _print_lod(results["lod"])
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(results, indent=2, default=float))
         print(f"\nwrote {args.json}")
     return results
+
+
+def _print_lod(rows: list) -> None:
+    print("\n== level of detail (render_batch lod=True vs full detail, same run, alternating rounds) ==")
+    for r in rows:
+        print(f"surface N={r['n']:,d} {r['res']}px  ladder build {r['build_s']:.1f} s (once per scene)")
+        for t in r["tols"]:
+            print(f"  lod_tol {t['tol_px']:.1f} px: full {t['fps_full']:6.1f} FPS, lod {t['fps_lod']:6.1f} FPS, "
+                  f"ratio {t['ratio_median']:.2f}x (rounds {', '.join(f'{x:.2f}' for x in t['ratios'])}); "
+                  f"PSNR min {t['psnr_min_db']:.1f} dB (median {t['psnr_median_db']:.1f}), "
+                  f"instance labels equal >= {100 * t['instance_agree_min']:.2f}%")
 
 
 def _busy(r: dict) -> str:

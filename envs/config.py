@@ -113,6 +113,7 @@ _CHECKS: dict[str, Callable[[str, Any], Any]] = {     # in the order the errors 
     "prompt": _prompt,
     "scene_seed": _int(0), "scene_pool": _int(1), "pool_seed": _int(0, none_ok=False), "pool_workers": _int(1),
     "pool_backend": _one_of(POOL_BACKENDS), "pool_timeout_s": _seconds, "render_threads": _int(1),
+    "render_lod": _flag,
     "cameras": _cameras,
     "scene": check_scene_arg,
     "sim": _sim,
@@ -153,6 +154,7 @@ class EnvConfig:
     render_width: int = 256
     render_height: int = 256
     render_threads: int | None = 1
+    render_lod: bool = False
     sim: MorphoSim | SimConfig | None = None
     task_params: dict | None = None
 

@@ -248,7 +248,8 @@ class MorphoSimEnv(gym.Env):
     def _render(self, t: float) -> tuple[Views, TaskView]:
         """Every render camera's view at scene time t, and the task camera's `TaskView`."""
         sources, cams, background, sky = self._render_request(t)
-        out = render_scene(sources, cams, background=background, sky=sky, backend=self._render_backend)
+        out = render_scene(sources, cams, background=background, sky=sky, backend=self._render_backend,
+                           lod=self.config.render_lod)
         return self._rendered(cams, out, t)
 
     def _render_request(self, t: float) -> tuple[list, list, tuple, Optional[np.ndarray]]:
@@ -273,7 +274,8 @@ class MorphoSimEnv(gym.Env):
         cam = self._rig.camera(self._observe.cameras[0], self.config.render_width, self.config.render_height)
         with numba_threads(self.config.render_threads):
             out = render_scene(self._sources(self.world.t), cam, background=self.world.scene.background,
-                               sky=self.world.scene.sky, backend=self._render_backend)
+                               sky=self.world.scene.sky, backend=self._render_backend,
+                               lod=self.config.render_lod)
         return out.rgb_uint8()
 
     # ================================================================== info

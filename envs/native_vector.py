@@ -242,7 +242,7 @@ class MorphoSimVectorEnv(VectorEnv):
 
     def _render_views(self, views: list) -> list:
         with numba_threads(self.render_threads):
-            return render_batch(views, backend=self.backend)
+            return render_batch(views, backend=self.backend, lod=self.envs[0].config.render_lod)
 
     def _rendered(self, indices: Sequence[int], requests: list, outs: list) -> list:
         """`_render`'s result for each of these envs, from the batched render of their requests."""

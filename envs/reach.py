@@ -90,6 +90,7 @@ class ReachEnv(MorphoSimEnv):
     | `render_width` | `int` | `256` | `render()` frame width |
     | `render_height` | `int` | `256` | `render()` frame height |
     | `render_threads` | `int \\| None` | `1` | numba threads for this env's skinning and rendering (set per call, then restored); None = numba's default |
+    | `render_lod` | `bool` | `False` | draw far object blocks as cached coarser merged Gaussians (`render.lod`, an approximation: off = exact images); CPU backend only |
     | `sim` | `MorphoSim \\| SimConfig \\| None` | `None` | the world: a `MorphoSim` or a `SimConfig`; None = `envs.config.DEFAULT_SIM_CONFIG` (oracle, detail 0.35) |
     | `task_params` | `dict \\| None` | `None` | overrides of `ReachTask.PARAMS` |
 

@@ -61,6 +61,8 @@ def render(
     background: Optional[Sequence[float]] = None,
     features: bool = False,
     sky: Optional[np.ndarray] = None,
+    lod: bool = False,
+    lod_tol: float = 1.0,
 ) -> RenderOutput:
     """Render a scene at time `t` (or plain Gaussians) from one or several cameras in one pass.
 
@@ -76,6 +78,9 @@ def render(
         sky: an equirectangular sky image [H', W', 3] in [0, 1] (`scene.sky`) shown behind what the
             Gaussians leave uncovered (numpy renders); default the first scene's when no
             `background` is given. Envs pass their scene's sky with their plain Gaussians.
+        lod, lod_tol: on "cpu" with numpy Gaussians, draw far object runs as coarser merged sets
+            whose cells project to at most `lod_tol` pixels (an approximation, off by default; see
+            `render_batch` and `morphosim_gym.render.lod`).
 
     Returns:
         RenderOutput: rgb [H, W, 3], depth [H, W], alpha [H, W], instance [H, W] and, with
@@ -96,6 +101,14 @@ def render(
     single = isinstance(camera, Camera)
     cams = [camera] if single else list(camera)
     viewmats, Ks, nears, width, height = cameras_to_arrays(cams)
+    if lod and backend == "cpu" and not g.is_torch and _lod_changes(source, t, cams, lod_tol):
+        parts = list(source) if isinstance(source, (list, tuple)) else [source]
+        outs = render_batch([(parts, c, background, sky) for c in cams], t, features=features, lod=True,
+                            lod_tol=lod_tol)
+        if single:
+            return outs[0]
+        return RenderOutput(**{k: (None if getattr(outs[0], k) is None else np.stack([getattr(o, k) for o in outs]))
+                               for k in _OUTPUT_KEYS})
     check_render_size(len(cams), width, height, g.feature_dim if features else 0)
 
     if g.is_torch:
@@ -118,12 +131,23 @@ def render(
     return RenderOutput(**{k: out.get(k) for k in _OUTPUT_KEYS})
 
 
+def _lod_changes(source: Source, t: float, cams: Sequence[Camera], tol: float) -> bool:
+    """Whether level of detail would draw any part of `source` coarser from any of these cameras
+    (if not, `render` takes its exact path: same images, no batching cost)."""
+    from .lod import lod_parts
+
+    parts = _source_parts(source, t, None)[0]
+    return any(len(got) != len(parts) or any(a is not b for a, b in zip(got, parts))
+               for got in (lod_parts(parts, c.world_to_camera, c.K, c.near, tol) for c in cams))
+
+
 View = tuple   # (source, camera), (source, camera, background) or (source, camera, background, sky)
 
 
 @serialised
 def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
-                 features: bool = False, cull: bool = False) -> list[RenderOutput]:
+                 features: bool = False, cull: bool = False, lod: bool = False,
+                 lod_tol: float = 1.0) -> list[RenderOutput]:
     """Render several views, each its own source, camera and background, in one batched pass.
 
     Args:
@@ -141,6 +165,11 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
             default: the projection already culls off-screen Gaussians for ~5 ns each, so on
             200k-Gaussian scenes at 128 px it saved at most a few percent, and cost about as
             much when nothing could be dropped).
+        lod: on "cpu", draw each far object run (one object id, >= 256 Gaussians) as the
+            coarsest of its cached merged levels whose cell projects to at most `lod_tol`
+            pixels at the run's nearest point (`morphosim_gym.render.lod`): an approximation,
+            off by default; object ids and instance labels are kept. Ignored on other backends.
+        lod_tol: that largest projected cell side in pixels (> 0; default 1).
 
     Returns:
         One `RenderOutput` per view (numpy, no leading camera axis), each exactly what
@@ -172,6 +201,11 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
     else:
         from .cpu.batch import batch_view, rasterize_batch_numpy
 
+        if lod:
+            from .lod import lod_parts
+
+            flat = [(lod_parts(parts, cam.world_to_camera, cam.K, cam.near, lod_tol), cam, bg)
+                    for parts, cam, bg in flat]
         outs = rasterize_batch_numpy([batch_view(parts, cam.world_to_camera, cam.K, cam.near, cam.width, cam.height,
                                                  bg) for parts, cam, bg in flat], features=features, cull=cull)
     for o, (_, cam, _, sky) in zip(outs, resolved):
