@@ -21,7 +21,6 @@ from gymnasium.envs.registration import load_env_creator
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from morphosim_gym.parallel import THREAD_SAFE_LAYERS, threading_layer
 from morphosim_gym.render.api import render_batch
 
 from . import ENTRY_POINTS
@@ -76,9 +75,11 @@ class MorphoSimVectorEnv(VectorEnv):
         pipeline: how many chunks a step's envs are rendered in. With more than one, a worker
             thread renders chunk c while this thread finishes chunk c - 1 (reward, observation,
             info) and prepares chunk c + 1 (rig, skinning, cameras), so the Python work and the
-            render run on different cores. None: 2 on the "cpu" backend when numba's threading
-            layer is thread-safe (tbb, omp), else 1 (no worker). Results are the same either way
-            (every view's image is independent of the batch it is rendered in).
+            render run on different cores. None: 1 (no worker): on 2 quiet cores the serial
+            batch was faster (Track vector-8 1,506 vs 1,264 steps/s with 2 chunks,
+            `benchmarks/results/envs_quiet_2026-12-02b.json`); more cores may favour 2 (ask for it
+            only with a thread-safe numba layer, tbb or omp). Results are the same either way (every view's
+            image is independent of the batch it is rendered in).
         kwargs: env arguments (the fields of `EnvConfig`) for every env.
 
     Gymnasium's `autoreset_mode` is NEXT_STEP (as `SyncVectorEnv`'s default): the step after an
@@ -212,10 +213,7 @@ class MorphoSimVectorEnv(VectorEnv):
         return [indices[bounds[j]:bounds[j + 1]] for j in range(k) if bounds[j + 1] > bounds[j]]
 
     def _pipeline_chunks(self) -> int:
-        if self.pipeline is not None:
-            return self.pipeline
-        # auto: overlap on the CPU backend where numba's layer lets two Python threads launch kernels
-        return 2 if self.backend == "cpu" and threading_layer() in THREAD_SAFE_LAYERS else 1
+        return 1 if self.pipeline is None else self.pipeline   # None: serial, faster on 2 cores (see __init__)
 
     def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
         """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
