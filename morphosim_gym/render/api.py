@@ -263,6 +263,7 @@ def _source_parts(source: Source, t: float, background: Optional[Sequence[float]
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")
     return gaussians, bg, sky
 
+
 def _composite_sky(rgb: np.ndarray, alpha: np.ndarray, sky: np.ndarray, cams: Sequence[Camera]) -> np.ndarray:
     """The sky behind what the Gaussians leave uncovered (`scene.sky.composite_sky`, compiled), for
     every backend's numpy output."""
