@@ -18,9 +18,13 @@ from .gaussians import Gaussians
 from .motion import Motion
 from .sky import check_sky
 
-__all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE"]
+__all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE", "POSE_CACHE_BYTES"]
 
-POSE_CACHE_SIZE = 4     # posed Gaussians kept per scene (by time), least recently used dropped first
+POSE_CACHE_SIZE = 4     # posed Gaussians always kept per scene (by time), least recently used dropped first
+POSE_CACHE_BYTES = 8 << 20
+"""More times are kept while a scene's posed means and quats take at most this many bytes: a
+4k-Gaussian scene (114 KB a time) keeps ~70 times, a whole 60-step episode at 10 Hz, so pooled
+scenes are skinned once per time, not once per episode; a 200k-Gaussian scene keeps the 4."""
 
 
 @dataclass(frozen=True)
@@ -173,6 +177,7 @@ class Scene4D:
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
         self._poses: OrderedDict[float, Gaussians] = OrderedDict()   # frame index -> posed Gaussians (LRU)
+        self._pose_bytes = 0                                          # bytes of their means and quats
         self._poses_lock = threading.Lock()
         self._hash: str | None = None
 
@@ -180,10 +185,12 @@ class Scene4D:
         state = dict(self.__dict__)
         state.pop("_poses_lock")
         state["_poses"] = OrderedDict()          # a cache, rebuilt on demand
+        state["_pose_bytes"] = 0
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
+        self.__dict__.setdefault("_pose_bytes", 0)     # a pickle from before the byte budget
         self._poses_lock = threading.Lock()
 
     # -------------------------------------------------------------- time
@@ -233,9 +240,11 @@ class Scene4D:
         g = Gaussians._trusted(means=means, quats=quats, scales=c.scales, opacities=c.opacities, colors=c.colors,
                                features=c.features, object_ids=c.object_ids)
         with self._poses_lock:
-            self._poses[frame] = g
-            while len(self._poses) > POSE_CACHE_SIZE:
-                self._poses.popitem(last=False)
+            if frame not in self._poses:
+                self._poses[frame] = g
+                self._pose_bytes += _posed_bytes(g)
+            while len(self._poses) > POSE_CACHE_SIZE and self._pose_bytes > POSE_CACHE_BYTES:
+                self._pose_bytes -= _posed_bytes(self._poses.popitem(last=False)[1])
         return g
 
     def centre(self, t: float = 0.0) -> np.ndarray:
@@ -404,3 +413,8 @@ def provenance_from_dict(d: Mapping[str, Any]) -> Provenance:
 def cameras_from_dicts(items: Sequence[Mapping[str, Any]]) -> tuple[Camera, ...]:
     """Cameras from their `to_dict` forms."""
     return tuple(Camera.from_dict(dict(c)) for c in items)
+
+
+def _posed_bytes(g: Gaussians) -> int:
+    """Bytes a pose-cache entry holds of its own (its means and quats; the rest is the scene's)."""
+    return int(g.means.nbytes + g.quats.nbytes)

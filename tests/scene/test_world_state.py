@@ -99,8 +99,11 @@ def test_scene_is_immutable_and_at_returns_read_only_arrays(tiny_scene):
     assert not np.allclose(tiny_scene.at(0.0).means, 0.0)
 
 
-def test_at_caches_recent_times_and_interleaves(tiny_scene):
+def test_at_caches_recent_times_and_interleaves(tiny_scene, monkeypatch):
+    from morphosim_gym.scene import scene4d
     from morphosim_gym.scene.scene4d import POSE_CACHE_SIZE
+
+    monkeypatch.setattr(scene4d, "POSE_CACHE_BYTES", 0)      # only the count limit
 
     times = [i / tiny_scene.fps for i in range(min(tiny_scene.num_frames, POSE_CACHE_SIZE))]
     first = [tiny_scene.at(t) for t in times]
@@ -112,6 +115,25 @@ def test_at_caches_recent_times_and_interleaves(tiny_scene):
         np.testing.assert_array_equal(g.quats, fresh.at(t).quats)
     tiny_scene.at(0.5 / tiny_scene.fps)                       # a new time evicts the least recently used
     assert len(tiny_scene._poses) <= POSE_CACHE_SIZE
+
+
+def test_at_keeps_more_times_within_the_byte_budget(tiny_scene, monkeypatch):
+    from morphosim_gym.scene import scene4d
+    from morphosim_gym.scene.scene4d import POSE_CACHE_SIZE
+
+    per_time = tiny_scene.gaussians.means.nbytes * 28 // 12     # posed means (12 B) and quats (16 B)
+    keep = POSE_CACHE_SIZE + 3
+    monkeypatch.setattr(scene4d, "POSE_CACHE_BYTES", keep * per_time)
+    times = [i * tiny_scene.duration / (keep + 2) for i in range(keep + 2)]
+    calls = []
+    apply = tiny_scene.motion.apply
+    monkeypatch.setattr(tiny_scene.motion, "apply", lambda *a: calls.append(1) or apply(*a), raising=False)
+    first = [tiny_scene.at(t) for t in times[:keep]]
+    assert len(calls) == keep and len(tiny_scene._poses) == keep
+    assert all(tiny_scene.at(t) is g for t, g in zip(times[:keep], first)) and len(calls) == keep   # no re-skinning
+    tiny_scene.at(times[keep])                                 # over the budget: the oldest goes
+    assert len(tiny_scene._poses) == keep and tiny_scene._pose_bytes == keep * per_time
+    assert float(tiny_scene.frame_index(times[0])) not in tiny_scene._poses
 
 
 def test_centre_is_on_the_generation_cameras_axis(tiny_scene):
