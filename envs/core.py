@@ -50,7 +50,10 @@ class MorphoSimEnv(gym.Env):
         super().__init_subclass__(**kwargs)
         cls.__signature__ = env_signature(cls.config_defaults)       # what help() and IDEs show
 
-    def __init__(self, **kwargs: Any) -> None:
+    def __init__(self, _scene_source: Optional[SceneSource] = None, **kwargs: Any) -> None:
+        """`_scene_source` (internal, for `MorphoSimVectorEnv`): a `SceneSource` of another env made
+        with the same `sim`, shared so that its pool is built once and its scenes (immutable, with
+        their pose caches) serve every env of the batch."""
         cfg = self.config = EnvConfig.from_kwargs(kwargs, self.config_defaults)
         task = cfg.task if cfg.task is not None else self.task_kind
         self._task: Task = make_task(task, **dict(cfg.task_params or {}))
@@ -59,7 +62,7 @@ class MorphoSimEnv(gym.Env):
         self._rig = self._task.make_rig()
         self._sim = make_sim(cfg.sim)
         self._render_backend = render_backend_of(self._sim)
-        self._source = SceneSource(self._sim)
+        self._source = _scene_source if _scene_source is not None else SceneSource(self._sim)
         self._fixed = load_fixed_scene(cfg.scene)            # a bad file or target fails here, at make
         if self._fixed is not None:
             self._fixed.resolve_target(self._task, cfg.target)

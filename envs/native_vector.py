@@ -115,7 +115,7 @@ class MorphoSimVectorEnv(VectorEnv):
         self.render_threads = render_threads
         self.pipeline = None if pipeline is None else int(pipeline)
         self._worker: Optional[ThreadPoolExecutor] = None
-        self.envs = [creator(**{**kwargs, **(per_env[i] or {})}) for i in range(n)]
+        self.envs = _make_envs(creator, kwargs, per_env)
         self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
         self._steppers = [LanguagePerturbation(_Deferred(env, self._pending[i]), **perturbations[i])
@@ -335,6 +335,23 @@ def _runs(items: list, keys: list) -> list:
         else:
             runs.append((key, [item]))
     return runs
+
+
+def _make_envs(creator: Callable[..., gym.Env], kwargs: Mapping[str, Any],
+               per_env: Sequence[Optional[Mapping[str, Any]]]) -> list:
+    """The batch's envs; an env whose `sim` argument is the first env's (the same object, or both
+    absent) shares the first env's `SceneSource`, so a pool is built once and pooled scenes (and
+    the posed Gaussians they cache) are one object for all the envs that draw them."""
+    envs: list = []
+    first_sim = None
+    for own in per_env:
+        merged = {**kwargs, **(own or {})}
+        if envs and merged.get("sim") is first_sim:
+            merged["_scene_source"] = envs[0]._source
+        envs.append(creator(**merged))
+        if len(envs) == 1:
+            first_sim = merged.get("sim")
+    return envs
 
 
 def _per_env(values: Optional[Sequence[Any]], n: int, name: str) -> list:

@@ -57,7 +57,7 @@ class SceneSource:
         """The scenes of (prompt, seed) `keys`, the missing ones built at once (`pool.build_scenes`)
         and all kept in the cache (which grows to hold them)."""
         keys = [(str(p), int(s)) for p, s in keys]
-        self.cache_size = max(self.cache_size, len(set(keys)))
+        self.cache_size = max(self.cache_size, len(set(keys) | set(self._cache)))   # room for every pool built into it
         missing = list(dict.fromkeys(k for k in keys if k not in self._cache))
         for key, scene in zip(missing, build_scenes(self.sim, missing, workers, backend, progress, timeout_s)):
             self._cache[key] = scene

@@ -1,6 +1,8 @@
 """The native vector env (`MorphoSimVectorEnv`): N worlds in one process, one batched render per
 step, env i identical to a single env seeded s + i (autoreset NEXT_STEP)."""
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -203,3 +205,35 @@ def test_a_pipelined_vector_env_deep_copies_and_both_copies_step_alike():
     assert np.array_equal(obs["rgb"], obs2["rgb"]) and np.array_equal(rew, rew2)
     venv.close()
     twin.close()
+
+
+def test_envs_with_one_sim_share_one_scene_source_and_build_the_pool_once(monkeypatch):
+    from morphosim_gym.envs import scenes
+
+    built = []
+    real = scenes.build_scenes
+    monkeypatch.setattr(scenes, "build_scenes", lambda sim, keys, *a: built.extend(keys) or real(sim, keys, *a))
+    other_sim = dataclasses.replace(FAST["sim"])                      # equal, but another object
+    venv = make_vec("MorphoSim/Track-v0", 3, vectorization_mode="vector", scene_pool=2,
+                    env_kwargs=[None, None, {"sim": other_sim}], **FAST)
+    sources = [env._source for env in venv.envs]
+    assert sources[0] is sources[1] and sources[2] is not sources[0]   # a different sim: its own source
+    keys = {(r.prompt, seed) for r, seed in venv.envs[0]._scenes.pool}
+    assert len(built) == 2 * len(keys)                                 # env 0's pool (shared by env 1), env 2's
+    venv.reset(seed=0)
+    pooled = {id(s) for s in sources[0]._cache.values()}
+    assert {id(env.world.scene) for env in venv.envs[:2]} <= pooled    # the pool's own scene objects
+    venv.close()
+
+
+def test_a_shared_scene_source_grows_to_hold_every_pool_built_into_it(monkeypatch):
+    from morphosim_gym.envs import scenes
+
+    monkeypatch.setattr(scenes, "build_scenes", lambda sim, keys, *a: [object() for _ in keys])
+    monkeypatch.setattr(scenes, "build_one", lambda sim, prompt, seed: object())
+    source = scenes.SceneSource(sim=None, cache_size=1)
+    source.build_many([("a", 0), ("b", 1)])
+    source.build_many([("c", 2)])                          # another env's pool in the same source
+    assert source.cache_size == 3
+    source.get("d", 3)                                     # a miss evicts only the least recent
+    assert list(source._cache) == [("b", 1), ("c", 2), ("d", 3)]
