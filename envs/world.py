@@ -8,12 +8,18 @@ clip's frames by `Scene4D.at`. The world never renders; the env does.
 from __future__ import annotations
 
 from typing import Optional
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
 from morphosim_gym.scene import Camera, Gaussians, Scene4D, SceneObject
 
 __all__ = ["SceneWorld"]
+
+_TARGET_POSITIONS: "WeakKeyDictionary[Scene4D, dict]" = WeakKeyDictionary()
+"""Per scene, (target id, t) -> the target's mean position: a function of the (immutable) scene,
+so every episode and every env on a pooled scene computes it once per time."""
+_POSITIONS_PER_SCENE = 4096      # entries kept per scene (times of a few episodes' clocks)
 
 
 class SceneWorld:
@@ -32,8 +38,6 @@ class SceneWorld:
     def __init__(self, scene: Scene4D, target: SceneObject) -> None:
         self.t = 0.0
         self.target = target
-        self._cached_key: tuple = ()
-        self._cached_pos = np.zeros(3)
         self._scene = self._original = scene
         self._index = self._original_index = np.flatnonzero(scene.gaussians.object_ids == target.id)
         if self._index.size == 0:
@@ -83,12 +87,14 @@ class SceneWorld:
         if self._index.size == 0:
             return None
         t = self.t if t is None else float(t)
-        key = (id(self._scene), t)
-        if self._cached_key != key:
-            g = self.gaussians(t)
-            self._cached_pos = g.means[self._index].mean(axis=0, dtype=np.float64)
-            self._cached_key = key
-        return self._cached_pos.copy()
+        known = _TARGET_POSITIONS.setdefault(self._scene, {})
+        key = (self.target.id, t)
+        pos = known.get(key)
+        if pos is None:
+            pos = self.gaussians(t).means[self._index].mean(axis=0, dtype=np.float64)
+            if len(known) < _POSITIONS_PER_SCENE:
+                known[key] = pos
+        return pos.copy()
 
     def target_path(self, n: int = 25) -> np.ndarray:
         """[n, 3] target positions at n evenly spaced times over the clip (in the scene as it was
