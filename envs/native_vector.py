@@ -253,6 +253,30 @@ class MorphoSimVectorEnv(VectorEnv):
             rendered.append(self.envs[i]._rendered(cams, out, self.envs[i].world.t))
         return rendered
 
+    def _add_info(self, vector_infos: dict, env_info: dict, env_num: int) -> dict:
+        """`VectorEnv._add_info` (same arrays, dtypes, masks and key order), without its per-key
+        throwaway mask array and repeated look-ups: it runs for every key of every env's info on
+        every step."""
+        n = self.num_envs
+        for key, value in env_info.items():
+            if key == "final_obs":
+                array = vector_infos.get(key)
+                if array is None:
+                    array = np.full(n, fill_value=None, dtype=object)
+                array[env_num] = value
+            elif isinstance(value, dict):
+                array = self._add_info(vector_infos.get(key, {}), value, env_num)
+            else:
+                array = vector_infos[key] if key in vector_infos else _info_array(value, n)
+                array[env_num] = value
+            mask_key = f"_{key}"
+            mask = vector_infos.get(mask_key)
+            if mask is None:
+                mask = np.zeros(n, dtype=np.bool_)
+            mask[env_num] = True
+            vector_infos[key], vector_infos[mask_key] = array, mask
+        return vector_infos
+
     def _batched_obs(self) -> dict:
         return concatenate(self.single_observation_space, self._obs,
                            create_empty_array(self.single_observation_space, self.num_envs))
@@ -335,6 +359,16 @@ def _runs(items: list, keys: list) -> list:
         else:
             runs.append((key, [item]))
     return runs
+
+
+def _info_array(value: Any, n: int) -> np.ndarray:
+    """The batch array `VectorEnv._add_info` makes for an info value: numbers and bools by their
+    type, arrays by shape and dtype, anything else as objects."""
+    if type(value) in (int, float, bool) or issubclass(type(value), np.number):
+        return np.zeros(n, dtype=type(value))
+    if isinstance(value, np.ndarray):
+        return np.zeros((n, *value.shape), dtype=value.dtype)
+    return np.full(n, fill_value=None, dtype=object)
 
 
 def _make_envs(creator: Callable[..., gym.Env], kwargs: Mapping[str, Any],

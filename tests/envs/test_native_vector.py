@@ -237,3 +237,35 @@ def test_a_shared_scene_source_grows_to_hold_every_pool_built_into_it(monkeypatc
     assert source.cache_size == 3
     source.get("d", 3)                                     # a miss evicts only the least recent
     assert list(source._cache) == [("b", 1), ("c", 2), ("d", 3)]
+
+
+def _deep_equal(a, b) -> bool:
+    """Equal structure, key order, types, dtypes and values (NaN equal to NaN)."""
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, dict):
+        return list(a) == list(b) and all(_deep_equal(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray):
+        if a.dtype != b.dtype or a.shape != b.shape:
+            return False
+        if a.dtype == object:
+            return all(_deep_equal(x, y) for x, y in zip(a.ravel(), b.ravel()))
+        return bool(np.array_equal(a, b, equal_nan=a.dtype.kind in "fc"))
+    return bool(a == b)
+
+
+def test_the_vector_info_batching_equals_gymnasiums():
+    fast = object.__new__(MorphoSimVectorEnv)            # only num_envs and the method are used
+    fast.num_envs = 3
+    infos = [{"success": True, "t": 0.1, "step": 3, "target": "ball", "edits": (), "reward_ctrl": np.float32(-0.01),
+              "cameras": {"eye": {"K": np.eye(3), "width": 84}}, "id_to_name": {0: "ground", 1: "ball"}},
+             {"final_obs": {"rgb": np.zeros(2)}, "t": 1, "target_position": np.arange(3.0), "edits": ("x",),
+              "cameras": {"eye": {"K": 2 * np.eye(3), "width": 84}}, "id_to_name": {1: "cube"}},
+             {"success": False, "step": np.int64(9), "target_position": None, "target": "cube", "final_obs": 7}]
+    plain = object.__new__(type("Plain", (gym.vector.VectorEnv,), {}))   # gymnasium's own, nested calls too
+    plain.num_envs = 3
+    ours, theirs = {}, {}
+    for i, info in enumerate(infos):
+        ours = fast._add_info(ours, info, i)
+        theirs = plain._add_info(theirs, info, i)
+    assert _deep_equal(ours, theirs)
