@@ -25,6 +25,9 @@ assets and an HDR sky where the asset packages are installed). Modes:
                    is serial, the default since 2026-12-02)
   vector-32        the same with 32 envs
 
+The table's "x single" column is each mode's median over the single env's median of the same id
+and scene kind, from this run (the issue-#23 check: `--modes single sync-8 vector-8 vector-32`).
+
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
 observation) by calling them directly. `--ratios` measures single, vector-8, sync-8,
 vector-8-1thread, vector-8-pipelined and vector-32 alternately in one run (A B C A B C ...) and
@@ -187,6 +190,15 @@ def breakdown(repeats: int = 300) -> dict:
     return {k: (round(v, 3) if isinstance(v, float) else v) for k, v in out.items()}
 
 
+def add_ratios_to_single(rows: list[dict]) -> None:
+    """Set each row's "ratio_to_single": its median over the "single" row of the same id and scene
+    kind (medians of runs taken in this process; None without a single row)."""
+    single = {(r["id"], r["scenes"]): r["steps_per_s"] for r in rows if r["mode"] == "single"}
+    for r in rows:
+        base = single.get((r["id"], r["scenes"]))
+        r["ratio_to_single"] = round(r["steps_per_s"] / base, 2) if base else None
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--ids", nargs="*", default=list(ENV_IDS))
@@ -213,9 +225,12 @@ def main() -> None:
                 print(f"{env_id:22s} {scenes:10s} {mode:16s} {row['steps_per_s']:8.1f} steps/s  (runs {row['runs']})",
                       flush=True)
 
-    print("\n| id | scenes | mode | steps/s (median) | min | max |\n|---|---|---|---|---|---|")
+    add_ratios_to_single(rows)
+    print("\n| id | scenes | mode | steps/s (median) | min | max | x single |\n|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['id']} | {r['scenes']} | {r['mode']} | {r['steps_per_s']:.0f} | {r['min']:.0f} | {r['max']:.0f} |")
+        ratio = "" if r["ratio_to_single"] is None else f"{r['ratio_to_single']:.2f}"
+        print(f"| {r['id']} | {r['scenes']} | {r['mode']} | {r['steps_per_s']:.0f} | {r['min']:.0f} | {r['max']:.0f} "
+              f"| {ratio} |")
     result = {"rows": rows, "settings": {"obs": "rgb 84x84 + proprio", "detail": 0.35, "control_hz": 10,
                                          "scene_pool": 8, "steps_per_run": args.steps, "repeats": args.repeats},
               "machine": machine()}

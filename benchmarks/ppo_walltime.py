@@ -1,15 +1,18 @@
 """Wall time of a short Stable-Baselines3 PPO run on Track-v0 with each way of vectorising the envs:
 SB3's `DummyVecEnv` (8 single envs in one process, the example's choice), SB3's `SubprocVecEnv`
 (one process per env) and our native batch (`SB3VecEnv` over `MorphoSimVectorEnv`: one batched
-render per step; "native-serial" without its render pipeline, `pipeline=1`).
+render per step, serial by default; "native-pipelined" with its render pipeline, `pipeline=2`).
 
     python benchmarks/ppo_walltime.py                          # 8k steps, every mode, 1 round
-    python benchmarks/ppo_walltime.py --timesteps 4096 --rounds 2 --modes dummy native
+    python benchmarks/ppo_walltime.py --timesteps 4096 --rounds 3 --modes dummy native
+    python benchmarks/ppo_walltime.py --timesteps 256 --pool 2 --modes dummy native   # a quick check
 
 Settings as examples/train_ppo_track.py: 64 px RGB only, 8 envs, frame stack 3, PPO CnnPolicy with
 n_steps=128, batch 256, 4 epochs, on the CPU (torch on every core). Each run reports the time to
 build the envs and the time of `learn` (env steps plus the CNN updates); with `--rounds` > 1 the
-modes alternate (A B C A B C ...) and the ratios to DummyVecEnv are per round, then the median.
+modes alternate (A B C A B C ...). The table gives per mode the medians over rounds of the learn
+time, of the learn steps per second and of the build time, and the speed-up over DummyVecEnv (the
+synchronous baseline): DummyVecEnv's learn time over the mode's, per round, then the median.
 Writes benchmarks/results/ppo_walltime.json.
 """
 
@@ -24,7 +27,7 @@ from pathlib import Path
 from typing import Callable
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODES = ("dummy", "subproc", "native", "native-serial")
+MODES = ("dummy", "subproc", "native", "native-pipelined")
 ENV_ID = "MorphoSim/Track-v0"
 
 
@@ -48,11 +51,11 @@ def build(mode: str, n: int, size: int, pool: int):
         return DummyVecEnv([_single_thunk(size, pool) for _ in range(n)])
     if mode == "subproc":
         return SubprocVecEnv([_single_thunk(size, pool) for _ in range(n)], start_method="spawn")
-    if mode in ("native", "native-serial"):
+    if mode in ("native", "native-pipelined"):
         from morphosim_gym.envs import make_vec
         from morphosim_gym.envs.sb3_vec import SB3VecEnv
 
-        extra = {"pipeline": 1} if mode == "native-serial" else {}
+        extra = {"pipeline": 2} if mode == "native-pipelined" else {}
         return SB3VecEnv(make_vec(ENV_ID, n, vectorization_mode="vector", width=size, height=size, scene_pool=pool,
                                   pool_seed=0, **extra), obs_key="rgb")
     raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
@@ -82,6 +85,31 @@ def run(mode: str, timesteps: int, n: int, size: int, pool: int, stack: int, see
             "steps_per_s": round(steps / learn, 1)}
 
 
+def summarise(runs: dict[str, list[dict]]) -> dict[str, dict]:
+    """Per mode: medians over rounds of learn seconds, learn steps/s and build seconds, and (with
+    "dummy" among the modes) the median per-round speed-up over DummyVecEnv's learn time."""
+    out = {}
+    for m, rs in runs.items():
+        out[m] = {"learn_s_median": round(statistics.median(r["learn_s"] for r in rs), 2),
+                  "steps_per_s_median": round(statistics.median(r["steps_per_s"] for r in rs), 1),
+                  "build_s_median": round(statistics.median(r["build_s"] for r in rs), 2), "rounds": len(rs)}
+        if "dummy" in runs:
+            per_round = [d["learn_s"] / r["learn_s"] for d, r in zip(runs["dummy"], rs)]
+            out[m]["speedup_over_dummy"] = round(statistics.median(per_round), 2)
+    return out
+
+
+def table(summary: dict[str, dict]) -> str:
+    """The summary as a Markdown table."""
+    lines = ["| mode | learn s (median) | steps/s (median) | build s (median) | speed-up over DummyVecEnv | rounds |",
+             "|---|---|---|---|---|---|"]
+    for m, s in summary.items():
+        speedup = f"{s['speedup_over_dummy']:.2f}x" if "speedup_over_dummy" in s else ""
+        lines.append(f"| {m} | {s['learn_s_median']:.2f} | {s['steps_per_s_median']:.0f} | {s['build_s_median']:.2f} "
+                     f"| {speedup} | {s['rounds']} |")
+    return "\n" + "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--timesteps", type=int, default=8192)
@@ -105,17 +133,10 @@ def main() -> None:
         for mode in args.modes:
             r = run(mode, args.timesteps, args.n_envs, args.size, args.pool, args.frame_stack, args.seed)
             runs[mode].append(r)
-            print(f"{mode:8s} build {r['build_s']:7.1f}s  learn {r['learn_s']:7.1f}s  ({r['steps_per_s']:.0f} steps/s)",
+            print(f"{mode:16s} build {r['build_s']:7.1f}s  learn {r['learn_s']:7.1f}s  ({r['steps_per_s']:.0f} steps/s)",
                   flush=True)
-    summary = {m: {"learn_s_median": round(statistics.median(r["learn_s"] for r in rs), 2),
-                   "build_s_median": round(statistics.median(r["build_s"] for r in rs), 2)} for m, rs in runs.items()}
-    if "dummy" in runs:
-        for m, rs in runs.items():
-            per_round = [d["learn_s"] / r["learn_s"] for d, r in zip(runs["dummy"], rs)]
-            summary[m]["dummy_over_this_learn"] = round(statistics.median(per_round), 2)
-    print("\n| mode | learn s (median) | build s | DummyVecEnv learn time / this |\n|---|---|---|---|")
-    for m, s in summary.items():
-        print(f"| {m} | {s['learn_s_median']} | {s['build_s_median']} | {s.get('dummy_over_this_learn', '')} |")
+    summary = summarise(runs)
+    print(table(summary))
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"runs": runs, "summary": summary, "settings": {k: str(v) for k, v in vars(args).items()},
                                      "machine": {"cpus": os.cpu_count(),
