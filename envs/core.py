@@ -125,6 +125,11 @@ class MorphoSimEnv(gym.Env):
             return self._reset(opts)
 
     def _reset(self, opts: ResetOptions) -> tuple[dict, dict]:
+        self._reset_begin(opts)
+        return self._reset_end(self._render(self.world.t))
+
+    def _reset_begin(self, opts: ResetOptions) -> None:
+        """The part of a reset before its render: choose and edit the scene, place the rig."""
         rng = self.np_random
         target_name = opts.target if opts.target is not None else self.config.target
         if self._fixed is not None and opts.prompt is None:
@@ -150,8 +155,11 @@ class MorphoSimEnv(gym.Env):
         self._episode = {"prompt": request.prompt, "scene_seed": scene_seed, "target": target.name,
                          "target_id": target.id, "instruction": self._task.instruction(description),
                          "edit_policy": policy}
-        views, view = self._render(world.t)
-        metrics = dict(self._task.measure(world, self._rig, view), **self._task.reset_metrics())
+
+    def _reset_end(self, rendered: tuple[Views, TaskView]) -> tuple[dict, dict]:
+        """The part of a reset after its render (`_render`'s views): the first observation and info."""
+        views, view = rendered
+        metrics = dict(self._task.measure(self.world, self._rig, view), **self._task.reset_metrics())
         return self._observe(views, self._rig.proprio()), self._info(views, False, {}, metrics)
 
     # ================================================================== edits

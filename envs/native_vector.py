@@ -24,6 +24,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array,
 from morphosim_gym.render.api import render_batch
 
 from . import ENTRY_POINTS
+from .options import ResetOptions
 from .spaces import check_action
 from .threads import numba_threads
 from .wrappers import LanguagePerturbation
@@ -156,39 +157,49 @@ class MorphoSimVectorEnv(VectorEnv):
         rewards = np.zeros(n, dtype=np.float64)
         terms = np.zeros(n, dtype=bool)
         truncs = np.zeros(n, dtype=bool)
-        infos: dict = {}
-        stepping = []
-        for i in range(n):
-            if self._autoreset[i]:
-                target = self._steppers[i] or self.envs[i]
-                self._obs[i], info = target.reset()
-                infos = self._add_info(infos, info, i)
-            else:
-                stepping.append(i)
+        stepping = [i for i in range(n) if not self._autoreset[i]]
+        resetting = [i for i in range(n) if self._autoreset[i]]
+        # resets of unwrapped envs join the first chunk's render (serial batch only); the others reset here
+        joining = [i for i in resetting if self._steppers[i] is None] if self._pipeline_chunks() == 1 else []
+        reset_out = {i: (self._steppers[i] or self.envs[i]).reset() for i in resetting if i not in joining}
         # chunk by chunk: advance and build the render requests, hand the chunk's render to the
         # worker, finish the previous chunk (reward, observation, info) while this one renders
         pending: deque = deque()
         extra: dict = {}
         checked: dict = {}
-        for chunk in self._chunks(stepping):
+        stepped: list = []
+        chunks = self._chunks(stepping) or [[]]
+        chunks[0] = joining + chunks[0]
+        for chunk in chunks:
+            if not chunk:
+                continue
             requests = self._prepare(chunk, acts, checked, extra)
             pending.append((chunk, requests, self._launch(requests)))
             if len(pending) > 1:
-                infos = self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, infos)
+                self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
         while pending:
-            infos = self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, infos)
+            self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
+        infos: dict = {}
+        for i in resetting:                      # reset infos first, then the steps', as each env's own order
+            self._obs[i], info = reset_out[i]
+            infos = self._add_info(infos, info, i)
+        for i, info in stepped:
+            infos = self._add_info(infos, info, i)
         self._autoreset = terms | truncs
         return self._batched_obs(), rewards, terms, truncs, infos
 
     def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
-                terms: np.ndarray, truncs: np.ndarray, infos: dict) -> dict:
-        """The rest of the step of a chunk's envs once its render is done; the updated infos."""
+                terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
+        """The rest of the step of a chunk's envs once its render is done: a resetting env's
+        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`."""
         outs = launched.result(timeout=_RENDER_TIMEOUT_S) if isinstance(launched, Future) else launched
         for i, rendered in zip(chunk, self._rendered(chunk, requests, outs)):
-            self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
-            info.update(extra[i])
-            infos = self._add_info(infos, info, i)
-        return infos
+            if i in checked:
+                self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
+                info.update(extra[i])
+                stepped.append((i, info))
+            else:
+                reset_out[i] = self.envs[i]._reset_end(rendered)
 
     def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
         """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
@@ -217,14 +228,19 @@ class MorphoSimVectorEnv(VectorEnv):
 
     def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
         """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
-        and `extra`) and build its `_render_request`; one `numba_threads` per run of envs with the
-        same `render_threads` (it is not free: a lock and two thread-count changes)."""
+        and `extra`), or begin its reset if it is resetting (it stays out of `checked`), and build its `_render_request`; one `numba_threads` per
+        run of envs with the same `render_threads` (it is not free: a lock and two thread-count
+        changes)."""
         requests = []
         for threads, run in _runs(chunk, [self.envs[i].config.render_threads for i in chunk]):
             with numba_threads(threads):
                 for i in run:
-                    checked[i], extra[i] = self._advance(i, acts[i])
                     env = self.envs[i]
+                    if self._autoreset[i]:
+                        gym.Env.reset(env)                 # as env.reset() does before its own work
+                        env._reset_begin(ResetOptions.parse(None))
+                    else:
+                        checked[i], extra[i] = self._advance(i, acts[i])
                     requests.append(env._render_request(env.world.t))
         return requests
 

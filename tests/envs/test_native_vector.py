@@ -269,3 +269,33 @@ def test_the_vector_info_batching_equals_gymnasiums():
         ours = fast._add_info(ours, info, i)
         theirs = plain._add_info(theirs, info, i)
     assert _deep_equal(ours, theirs)
+
+
+def test_autoresets_join_the_batched_render(monkeypatch):
+    from morphosim_gym.envs import core
+
+    calls = []
+    real = core.render_scene
+    monkeypatch.setattr(core, "render_scene", lambda *a, **k: calls.append(1) or real(*a, **k))
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", scene_pool=1, **FAST)
+    singles = [make("MorphoSim/Track-v0", scene_pool=1) for _ in range(N)]
+    venv.reset(seed=3)
+    for i, env in enumerate(singles):
+        env.reset(seed=3 + i)
+    a = np.zeros((N, 3), np.float32)
+    done = np.zeros(N, bool)
+    resets = 0
+    while resets < N:                                        # Track truncates at the clip's end: all reset
+        before = len(calls)
+        vobs, _, vterm, vtrunc, vinfo = venv.step(a)
+        assert len(calls) == before                          # no env rendered on its own, resets included
+        for i, env in enumerate(singles):
+            if done[i]:
+                obs, info = env.reset()
+                resets += 1
+            else:
+                obs, *_, info = env.step(a[i])
+            _check_obs(vobs, i, obs)
+            _check_info(vinfo, i, info)
+        done = vterm | vtrunc
+    venv.close()
