@@ -44,6 +44,9 @@ RUNS = {   # row name -> (video, how it is read); the "test" parts were fixed be
     "bikes_test": ("bikes", {"part": "test", "shot": 4}),                   # shot 4, frames 187-241
     "vtest": ("vtest", {"part": "dev"}),                                    # frames 0-96
     "vtest_test": ("vtest", {"part": "test", "start": 400}),                # frames 400-496
+    # second held-out parts, fixed before the next round of tuning (the "test" parts above were seen)
+    "bikes_test2": ("bikes", {"part": "test2", "shot": 3}),                 # shot 3, frames 137-186
+    "vtest_test2": ("vtest", {"part": "test2", "start": 650}),              # frames 650-746
 }
 
 
