@@ -15,9 +15,12 @@ between score below simply showing the previous frame. `motion_layers` adds to a
   shows its own layer, and the time half-way between two fitted frames shows both neighbours'
   layers moved towards each other;
 * for a still camera, a background plate: the per-pixel median of the frames over the pixels no
-  moving region covers, in front of the fitted background (which keeps what the view never saw,
-  from completion), and the fit's own mover Gaussians dropped; a moving camera has no plate and
-  keeps them behind the layers;
+  moving region covers (a pixel covered in every frame takes its nearest neighbour's depth), in
+  front of the fitted background (which keeps what the view never saw, from completion), with the
+  fit's own mover Gaussians dropped and so are its static Gaussians that the input view sorts in
+  front of the plate anywhere within their extent (floaters that only blur the plate's pixels);
+  the layers then keep only their pixels that differ from the plate (the mover, not the background
+  its mask also covers); a moving camera has no plate and keeps the fit's movers behind the layers;
 * colours refined against the frames through the renderer (its blur undone, `refine_rounds`).
 
 The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
@@ -60,6 +63,11 @@ class LayerConfig:
         keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: for a
             moving camera, which has no plate to show behind them; a still camera drops them).
         refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
+        plate_level: with a plate, a layer keeps only the pixels of its frame that differ from the
+            plate by more than this (0-255, any channel): the mover itself, not the background its
+            mask also covers (which the plate shows, and which would otherwise move along).
+        drop_occluders: with a plate, drop the fitted Gaussians of the static objects that the input
+            view sorts in front of it (they can only cover its per-pixel colours there).
     """
 
     min_area: int = 4
@@ -73,6 +81,8 @@ class LayerConfig:
     refine_rounds: int = 3
     keep_movers: bool | None = None
     refine_step: float = 1.0
+    plate_level: float = 12.0
+    drop_occluders: bool = True
 
 
 @dataclass(frozen=True)
@@ -149,13 +159,22 @@ def _displacement(cams: tuple[Camera, ...], a: int, b: int, centre: np.ndarray, 
     return pb - pa
 
 
-def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig) -> dict[str, np.ndarray]:
-    """The movers' Gaussians of every frame and their nodes' translations on the half-step timeline."""
+def _differs_from_plate(frames: np.ndarray, plate: np.ndarray, level: float) -> np.ndarray:
+    """[T, H, W] pixels whose colour differs from the plate image (in [0, 1]) by more than `level` (0-255)."""
+    return np.abs(frames.astype(np.float64) - plate[None] * 255.0).max(axis=-1) > level
+
+
+def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
+            plate: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The movers' Gaussians of every frame and their nodes' translations on the half-step timeline
+    (with a `plate` image, only the movers' pixels that differ from it)."""
     import cv2
 
     t = clip.num_frames
     cams = clip.cameras
     moving = np.isin(priors.masks, priors.movers) & (priors.depth > 0)
+    if plate is not None:
+        moving &= _differs_from_plate(clip.frames, plate, cfg.plate_level)
     parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
     trans: list[np.ndarray] = []
     for k in range(t):
@@ -202,12 +221,60 @@ def _plate(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerCon
             warnings.simplefilter("ignore", RuntimeWarning)
             plate = np.nanmedian(frames, axis=0)
     plate = np.where(np.isnan(plate), np.median(clip.frames, axis=0), plate)
-    depth = np.max(np.where(moving, 0.0, priors.depth), axis=0)
+    depth = _fill_nearest(np.max(np.where(moving, 0.0, priors.depth), axis=0), np.max(priors.depth, axis=0) > 0)
     rows, cols = np.nonzero(depth > 0)
     z = depth[rows, cols].astype(np.float64) * (1.0 - cfg.plate_offset)
     pts, fp = _lift(clip.cameras[0], rows, cols, z)
+    plate_depth = np.zeros(depth.shape)
+    plate_depth[rows, cols] = z
     return {"means": pts, "colors": plate[rows, cols] / 255.0, "footprint": fp, "ids": np.full(len(rows), setting),
-            "pixel": np.stack([np.zeros(len(rows), int), rows, cols], axis=1), "image": plate / 255.0}
+            "pixel": np.stack([np.zeros(len(rows), int), rows, cols], axis=1), "image": plate / 255.0,
+            "depth": plate_depth}
+
+
+def _fill_nearest(depth: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """`depth` [H, W] with its unknown (<= 0) pixels inside `where` given their nearest known pixel's depth
+    (a pixel that a mover covers in every frame still gets a plate)."""
+    import cv2
+
+    known = depth > 0
+    hole = where & ~known
+    if not hole.any() or not known.any():
+        return depth
+    _, label = cv2.distanceTransformWithLabels((~known).astype(np.uint8), cv2.DIST_L2, 5,
+                                               labelType=cv2.DIST_LABEL_PIXEL)
+    source = np.flatnonzero(known.ravel())          # label j (1-based) is the j-th known pixel in scan order
+    out = depth.ravel().copy()
+    out[hole.ravel()] = out[source[label.ravel()[hole.ravel()] - 1]]
+    return out.reshape(depth.shape)
+
+
+def _in_front_of_plate(g: Gaussians, camera: Camera, plate_depth: np.ndarray, sigmas: float = 3.0) -> np.ndarray:
+    """[N] Gaussians that the (still) input camera sorts in front of some plate pixel they cover: their
+    centre is nearer than the farthest plate depth within `sigmas` of their projected size (the
+    renderer sorts by centre depth, so a large Gaussian covers every farther plate pixel it reaches)."""
+    import cv2
+
+    uv, z = camera.project(np.asarray(g.means, np.float64))
+    h, w = plate_depth.shape
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inside = (z > 0) & (uv[:, 0] > -w) & (uv[:, 0] < 2 * w) & (uv[:, 1] > -h) & (uv[:, 1] < 2 * h)
+        radius = sigmas * np.asarray(g.scales, np.float64).max(axis=1) * camera.fx / np.where(z > 0, z, 1.0)
+    out = np.zeros(len(z), bool)
+    idx = np.flatnonzero(inside)
+    levels = [0] + [2 ** i for i in range(int(np.ceil(np.log2(max(h, w)))) + 1)]   # max-filter radii in px
+    level = np.searchsorted(levels, np.minimum(radius[idx], levels[-1]))
+    pad = levels[-1]
+    padded = cv2.copyMakeBorder(plate_depth.astype(np.float32), pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0.0)
+    cols = np.clip(uv[idx, 0], -pad, w + pad - 1).astype(int) + pad
+    rows = np.clip(uv[idx, 1], -pad, h + pad - 1).astype(int) + pad
+    for j, r in enumerate(levels):
+        sel = level == j
+        if not sel.any():
+            continue
+        far = padded if r == 0 else cv2.dilate(padded, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1,) * 2))
+        out[idx[sel]] = z[idx[sel]] < far[rows[sel], cols[sel]]
+    return out
 
 
 def _gaussians(part: dict[str, np.ndarray], cfg: LayerConfig, features: np.ndarray | None) -> Gaussians:
@@ -357,17 +424,23 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     table = _feature_table(g, all_ids)
     keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
     keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
-    parts = [g.subset(keep)]
     spans: dict[str, slice] = {}
     pixels: dict[str, np.ndarray] = {}
     targets: dict[str, np.ndarray] = {}
     setting = [o.id for o in scene.objects if o.role == "background"]
+    plate = None
     if cfg.plate and _still(clip) and setting and clip.num_frames > 1:
         plate = _plate(clip, pri, setting[0], cfg)
+        if cfg.drop_occluders:                    # the movers kept by choice (keep_movers) stay
+            keep &= ~(_in_front_of_plate(g, clip.cameras[0], plate["depth"]) &
+                      ~np.isin(np.asarray(g.object_ids), pri.movers))
+    parts = [g.subset(keep)]
+    if plate is not None:
         _append(parts, spans, pixels, "plate", plate, cfg, table)
         targets["plate"] = plate["image"]
         targets["plate_free"] = (~np.isin(pri.masks[0], pri.movers)).astype(np.float64)
-    layers = _layers(clip, pri, cfg) if pri.movers and clip.num_frames > 1 else {}
+    layers = (_layers(clip, pri, cfg, None if plate is None else plate["image"])
+              if pri.movers and clip.num_frames > 1 else {})
     if layers:
         layers["ids"] = np.where(np.isin(layers["ids"], all_ids), layers["ids"], pri.movers[0])
         _append(parts, spans, pixels, "layers", layers, cfg, table)

@@ -155,3 +155,63 @@ def test_on_real_footage_layers_beat_holding_the_previous_frame():
         ours.append(psnr((_rgb(scene, clip, k / clip.fps) * 255).round(), full.frames[o]))
         hold.append(psnr(full.frames[o - 1], full.frames[o]))
     assert np.mean(ours) > np.mean(hold), (ours, hold)
+
+
+def _with_big_background_gaussian(clip: GeneratedClip, row: int, behind: float, size: float) -> Scene4D:
+    """The stub fit plus one large cyan background Gaussian centred behind the ground at pixel (W/2, row)
+    (by `behind` times its depth): the centre is behind the plate there, its extent reaches farther ground."""
+    fitted = _fitted(clip)
+    cam = clip.cameras[0]
+    z = float(ground_plane_depth(cam)[row, W // 2]) * behind
+    centre = cam.unproject(np.array([W / 2, row + 0.5]), np.float64(z))
+    g0 = fitted.gaussians
+    g = Gaussians(means=np.vstack([g0.means, centre]), quats=np.tile([1.0, 0, 0, 0], (3, 1)),
+                  scales=np.vstack([g0.scales, np.full((1, 3), size)]), opacities=[0.5, 0.5, 0.95],
+                  colors=np.vstack([g0.colors, [[0.0, 1.0, 1.0]]]), features=np.vstack([g0.features, [[1.0, 0.0]]]),
+                  object_ids=[0, 1, 0])
+    return Scene4D(g, Motion.static(3, clip.num_frames), fitted.objects, clip.fps, fitted.cameras)
+
+
+def test_fitted_gaussians_that_cover_the_plate_in_the_input_view_are_dropped():
+    clip, pri = _clip()
+    row = H - 6
+    fitted = _with_big_background_gaussian(clip, row, 1.15, 0.3)
+    depth = ground_plane_depth(clip.cameras[0])
+    assert depth[row - 6, W // 2] > depth[row, W // 2] * 1.15        # it covers farther ground above its centre
+    band = (slice(row - 11, row - 6), slice(W // 2 - 3, W // 2 + 3))
+    for keep in (False, True):
+        scene = motion_layers(fitted, clip, priors=pri, config=LayerConfig(drop_occluders=not keep, refine_rounds=0))
+        err = np.abs(_rgb(scene, clip, 0.0)[band] - clip.frames[0][band] / 255.0).mean()
+        assert (err > 0.06) if keep else (err < 0.035), (keep, err)
+    assert len(motion_layers(fitted, clip, priors=pri).gaussians) < len(
+        motion_layers(fitted, clip, priors=pri, config=LayerConfig(drop_occluders=False)).gaussians)
+
+
+def test_layers_carry_only_the_movers_pixels_not_the_background_their_masks_cover():
+    clip, pri = _clip()
+    import cv2
+
+    wide = np.stack([cv2.dilate(m.astype(np.uint8), np.ones((7, 7), np.uint8)) for m in pri.masks]).astype(np.int32)
+    pri = LayerPriors(wide, pri.depth, pri.movers)               # masks 3 px wider than the square
+    k = 1
+    truth = clip.frames[0].copy()                                # the frame half-way between k and k + 1
+    truth[:] = np.where(pri.masks[0][..., None] > 0, clip.frames[-1], clip.frames[0])   # background there
+    x0 = 8 + STEP * k + STEP // 2
+    truth[ROW:ROW + SIDE, x0:x0 + SIDE] = (230, 20, 20)
+    margin = (slice(ROW - 3, ROW - 1), slice(x0, x0 + SIDE))     # above the square, inside both masks
+    assert np.all(wide[k][margin] > 0) and np.all(wide[k + 1][margin] > 0)
+    for level, ok in ((LayerConfig().plate_level, True), (-1.0, False)):
+        scene = motion_layers(_fitted(clip), clip, priors=pri, config=LayerConfig(plate_level=level))
+        err = np.abs(_rgb(scene, clip, (k + 0.5) / clip.fps)[margin] - truth[margin] / 255.0).mean()
+        assert (err < 0.03) if ok else (err > 0.05), (level, err)
+
+
+def test_a_pixel_a_mover_covers_in_every_frame_still_gets_a_plate():
+    clip, pri = _clip()
+    masks = pri.masks.copy()
+    masks[:, 8:14, 50:56] = 1                                    # a still "mover" masked in every frame
+    pri = LayerPriors(masks, pri.depth, pri.movers)
+    scene = motion_layers(_fitted(clip), clip, priors=pri)
+    for k in (0, T - 1):
+        img = _rgb(scene, clip, k / clip.fps)
+        assert np.abs(img[9:13, 51:55] - clip.frames[k][9:13, 51:55] / 255.0).mean() < 0.05
