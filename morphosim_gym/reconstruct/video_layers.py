@@ -25,8 +25,8 @@ between score below simply showing the previous frame. `motion_layers` adds to a
 
 The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
 seconds are unchanged; the fitted nodes are resampled); its feature field and objects are the
-fitted scene's (new Gaussians take the mean feature of their object's Gaussians, so edits select
-them). Layers are pixel-thin cut-outs facing the input view: a novel view far from it sees them
+fitted scene's (new Gaussians take their object's prototype latent, the one the semantic decoder
+reads most clearly as its name, `object_features.object_prototypes`, so edits select them). Layers are pixel-thin cut-outs facing the input view: a novel view far from it sees them
 edge-on.
 """
 
@@ -39,6 +39,7 @@ import numpy as np
 
 from ..scene import Camera, GeneratedClip, Gaussians, Motion, Scene4D
 from ..scene.camera_motion import slerp_cameras
+from .object_features import object_prototypes
 
 __all__ = ["LayerConfig", "LayerPriors", "layer_priors", "motion_layers", "region_flows"]
 
@@ -286,19 +287,6 @@ def _gaussians(part: dict[str, np.ndarray], cfg: LayerConfig, features: np.ndarr
                      object_ids=part["ids"].astype(np.int32))
 
 
-def _object_features(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
-    """[len(ids), D] mean feature of each id's Gaussians in `g` (None without features)."""
-    if g.features is None:
-        return None
-    f = np.asarray(g.features)
-    mean = f.mean(axis=0)
-    out = []
-    for i in ids:
-        sel = np.asarray(g.object_ids) == i
-        out.append(f[sel].mean(axis=0) if sel.any() else mean)
-    return np.asarray(out, np.float32).reshape(len(ids), f.shape[1])
-
-
 def _concat(parts: list[Gaussians]) -> Gaussians:
     names = ("means", "quats", "scales", "opacities", "colors", "object_ids")
     cat = {n: np.concatenate([np.asarray(getattr(p, n)) for p in parts]) for n in names}
@@ -391,13 +379,17 @@ def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice]
     return scene
 
 
-def _feature_table(g: Gaussians, ids: np.ndarray) -> np.ndarray | None:
-    """[max id + 1, D] mean feature of each object id's Gaussians (None without features)."""
-    feats = _object_features(g, ids)
-    if feats is None:
+def _feature_table(scene: Scene4D, ids: np.ndarray) -> np.ndarray | None:
+    """[max id + 1, D] latent for new Gaussians of each object id: the object's prototype
+    (`object_prototypes`: the latent that decodes most clearly as its name; None without features)."""
+    protos = object_prototypes(scene.gaussians, scene.objects, scene.decoders.get("semantic"))
+    if not protos:
         return None
-    table = np.zeros((int(ids.max()) + 1, feats.shape[1]), np.float32)
-    table[ids] = feats
+    dim = len(next(iter(protos.values())))
+    table = np.zeros((int(ids.max()) + 1, dim), np.float32)
+    fallback = np.mean(list(protos.values()), axis=0)
+    for i in ids:
+        table[i] = protos.get(int(i), fallback)
     return table
 
 
@@ -421,7 +413,7 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     pri = priors or layer_priors(clip, scene)
     g = scene.gaussians
     all_ids = np.array(sorted({o.id for o in scene.objects}), np.int64)
-    table = _feature_table(g, all_ids)
+    table = _feature_table(scene, all_ids)
     keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
     keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
     spans: dict[str, slice] = {}

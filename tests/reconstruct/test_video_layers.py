@@ -215,3 +215,30 @@ def test_a_pixel_a_mover_covers_in_every_frame_still_gets_a_plate():
     for k in (0, T - 1):
         img = _rgb(scene, clip, k / clip.fps)
         assert np.abs(img[9:13, 51:55] - clip.frames[k][9:13, 51:55] / 255.0).mean() < 0.05
+
+
+def test_layers_of_a_small_mover_decode_as_it_and_an_edit_of_it_selects_them():
+    """The fit's person Gaussians mostly learned a road-heavy blend (as a few walkers over a large
+    street do): the layers take the latent that reads as "person", so recolouring the person
+    changes the layers (the mean latent would read as "road" and select nothing)."""
+    import morphosim_gym as ms
+    from morphosim_gym.language import embeddings
+
+    clip, pri = _clip()
+    road, person = embeddings.embed(["road", "person"])
+    d = len(road)
+    feats = np.stack([road, 0.75 * road + 0.25 * person, 0.75 * road + 0.25 * person, person])
+    g = Gaussians(means=np.array([[0.0, 3.0, 0.0], [0.0, 3.0, 0.3], [0.05, 3.0, 0.3], [0.1, 3.0, 0.3]]),
+                  quats=np.tile([1.0, 0, 0, 0], (4, 1)), scales=np.full((4, 3), 0.01), opacities=np.full(4, 0.5),
+                  colors=np.full((4, 3), 0.5), features=feats, object_ids=[0, 1, 1, 1])
+    objects = (SceneObject(0, "road", "road", role="background"), SceneObject(1, "person", "person"))
+    decoder = ms.scene.FeatureDecoder("semantic", [np.eye(d)], [np.zeros(d)], normalize=True)
+    fitted = Scene4D(g, Motion.static(4, clip.num_frames), objects, clip.fps, (clip.cameras[0],),
+                     decoders={"semantic": decoder})
+    scene = motion_layers(fitted, clip, priors=pri)
+    ids = np.asarray(scene.gaussians.object_ids)
+    sim = decoder.similarity(np.asarray(scene.gaussians.features)[ids == 1], embeddings.embed(["road", "person"]))
+    assert np.all(sim[:, 1] > sim[:, 0])
+    red = ms.MorphoSim().edit(scene, "make the person red")
+    changed = np.any(np.asarray(red.gaussians.colors) != np.asarray(scene.gaussians.colors), axis=1)
+    assert changed.sum() >= 0.9 * (ids == 1).sum() and not changed[ids == 0].any()
