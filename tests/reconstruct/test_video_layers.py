@@ -242,3 +242,21 @@ def test_layers_of_a_small_mover_decode_as_it_and_an_edit_of_it_selects_them():
     red = ms.MorphoSim().edit(scene, "make the person red")
     changed = np.any(np.asarray(red.gaussians.colors) != np.asarray(scene.gaussians.colors), axis=1)
     assert changed.sum() >= 0.9 * (ids == 1).sum() and not changed[ids == 0].any()
+
+
+def test_a_fast_mover_is_found_beyond_the_fixed_window_from_its_coarse_match():
+    """A 10 px square moving 14 px a frame, searched +- 8 px: found only around its half-resolution match."""
+    from morphosim_gym.reconstruct.video_layers import coarse_guesses
+
+    rng = np.random.default_rng(1)
+    tex = np.repeat(np.repeat(rng.integers(60, 200, (H // 4, W // 4, 3), dtype=np.uint8), 4, 0), 4, 1)
+    frames, labels = np.stack([tex, tex]), np.zeros((H, W), np.int32)
+    for i, x in enumerate((10, 24)):
+        frames[i, ROW:ROW + SIDE, x:x + SIDE] = (230, 20, 20)
+    labels[ROW:ROW + SIDE, 10:10 + SIDE] = 1
+    guess = coarse_guesses(frames, 0, 1, labels, 1, search=8)
+    assert np.abs(guess[0] - [14, 0]).max() <= 2                     # a rough guess
+    assert region_flows(frames, 0, 1, labels, 1, search=8, guess=guess)[0] == pytest.approx([14, 0], abs=0.5)
+    assert np.abs(region_flows(frames, 0, 1, labels, 1, search=8)[0][0] - 14) > 5
+    with pytest.raises(ValueError, match="guess"):
+        region_flows(frames, 0, 1, labels, 1, guess=np.zeros((2, 2)))
