@@ -32,23 +32,23 @@ def _single_thread() -> None:
 _RUNNERS: dict[tuple[str, Optional[str], bool], EpisodeRunner] = {}
 
 
-def _runner(suite: Suite, cache_dir: Optional[str], strict: bool) -> EpisodeRunner:
-    key = (suite.digest(), cache_dir, strict)
+def _runner(suite: Suite, cache_dir: Optional[str], grounding: Optional[str]) -> EpisodeRunner:
+    key = (suite.digest(), cache_dir, grounding)
     if key not in _RUNNERS:
-        _RUNNERS[key] = EpisodeRunner(suite, cache_dir, strict)
+        _RUNNERS[key] = EpisodeRunner(suite, cache_dir, grounding)
     return _RUNNERS[key]
 
 
-def _prepare_one(suite: Suite, cache_dir: Optional[str], strict: bool, seed: int) -> str:
-    return _runner(suite, cache_dir, strict).prepare(seed)
+def _prepare_one(suite: Suite, cache_dir: Optional[str], grounding: Optional[str], seed: int) -> str:
+    return _runner(suite, cache_dir, grounding).prepare(seed)
 
 
-def _run_one(suite: Suite, cache_dir: Optional[str], strict: bool, job: Job) -> EpisodeResult:
-    return _runner(suite, cache_dir, strict).run(*job)
+def _run_one(suite: Suite, cache_dir: Optional[str], grounding: Optional[str], job: Job) -> EpisodeResult:
+    return _runner(suite, cache_dir, grounding).run(*job)
 
 
 def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
-           strict: bool) -> Iterator[EpisodeResult]:
+           grounding: Optional[str]) -> Iterator[EpisodeResult]:
     if workers <= 1:
         import numba
 
@@ -56,9 +56,9 @@ def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[
         _single_thread()
         try:
             for seed in seeds:
-                _prepare_one(suite, cache_dir, strict, seed)
+                _prepare_one(suite, cache_dir, grounding, seed)
             for job in jobs:
-                yield _run_one(suite, cache_dir, strict, job)
+                yield _run_one(suite, cache_dir, grounding, job)
         finally:
             numba.set_num_threads(threads)
         return
@@ -67,9 +67,9 @@ def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[
 
     with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
                              initializer=_single_thread) as pool:
-        for fut in as_completed([pool.submit(_prepare_one, suite, cache_dir, strict, s) for s in seeds]):
+        for fut in as_completed([pool.submit(_prepare_one, suite, cache_dir, grounding, s) for s in seeds]):
             fut.result()
-        futures = [pool.submit(_run_one, suite, cache_dir, strict, job) for job in jobs]
+        futures = [pool.submit(_run_one, suite, cache_dir, grounding, job) for job in jobs]
         for fut in as_completed(futures):
             yield fut.result()
 
@@ -85,7 +85,7 @@ def _ray() -> Any:
 
 
 def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
-                  address: Optional[str], strict: bool) -> Iterator[EpisodeResult]:
+                  address: Optional[str], grounding: Optional[str]) -> Iterator[EpisodeResult]:
     ray = _ray()
     started = False
     if not ray.is_initialized():
@@ -94,19 +94,19 @@ def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Op
         ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False, **kw)
         started = True
     try:
-        yield from _ray_run(ray, suite, seeds, jobs, cache_dir, workers, strict)
+        yield from _ray_run(ray, suite, seeds, jobs, cache_dir, workers, grounding)
     finally:
         if started:
             ray.shutdown()
 
 
 def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
-             strict: bool) -> Iterator[EpisodeResult]:
+             grounding: Optional[str]) -> Iterator[EpisodeResult]:
     @ray.remote(num_cpus=1)
     class Worker:
-        def __init__(self, suite: Suite, cache_dir: Optional[str], strict: bool) -> None:
+        def __init__(self, suite: Suite, cache_dir: Optional[str], grounding: Optional[str]) -> None:
             _single_thread()
-            self.runner = EpisodeRunner(suite, cache_dir, strict)
+            self.runner = EpisodeRunner(suite, cache_dir, grounding)
 
         def prepare(self, seeds: list[int]) -> list[str]:
             return [self.runner.prepare(s) for s in seeds]
@@ -116,7 +116,7 @@ def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_di
 
     n = max(1, min(workers, len(jobs) or 1))
     suite_ref = ray.put(suite)
-    actors = [Worker.remote(suite_ref, cache_dir, strict) for _ in range(n)]
+    actors = [Worker.remote(suite_ref, cache_dir, grounding) for _ in range(n)]
     ray.get([a.prepare.remote(seeds[i::n]) for i, a in enumerate(actors)])      # each scene generated once
     from ray.util import ActorPool
 
@@ -127,12 +127,16 @@ def _ray_run(ray: Any, suite: Suite, seeds: list[int], jobs: list[Job], cache_di
 
 
 def run_backend(backend: str, suite: Suite, seeds: Iterable[int], jobs: Iterable[Job], cache_dir: Optional[str],
-                workers: int = 1, address: Optional[str] = None, strict: bool = False) -> Iterator[EpisodeResult]:
-    """Generate the scenes of `seeds` once, then run `jobs`, yielding results as they finish; `strict`:
-    see `EpisodeRunner`."""
-    seeds, jobs = list(seeds), list(jobs)
+                workers: int = 1, address: Optional[str] = None,
+                grounding: Optional[str] = None) -> Iterator[EpisodeResult]:
+    """Generate the scenes of `seeds` once, then run `jobs`, yielding results as they finish.
+    `grounding`: the level of the scene prompts (see `EpisodeRunner`); None: the one in force here,
+    resolved once in this process and handed to every worker (local or Ray) as it is."""
+    from morphosim_gym.language.grounding import grounding_level
+
+    seeds, jobs, grounding = list(seeds), list(jobs), grounding_level(grounding)
     if backend == "local":
-        return _local(suite, seeds, jobs, cache_dir, workers, strict)
+        return _local(suite, seeds, jobs, cache_dir, workers, grounding)
     if backend == "ray":
-        return _ray_episodes(suite, seeds, jobs, cache_dir, workers, address, strict)
+        return _ray_episodes(suite, seeds, jobs, cache_dir, workers, address, grounding)
     raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")

@@ -109,7 +109,7 @@ def _bench(args: argparse.Namespace) -> int:
         out = args.out or f"out/bench/{suite.name}"
         result = run_sweep(suite, args.policy or ["oracle"], out, backend=args.backend, workers=args.workers,
                            cache_dir=args.cache_dir, address=args.ray_address, progress=not args.no_progress,
-                           strict=_grounding_for_sweep(args))
+                           grounding=grounding_from_args(args))
     except ValueError as exc:
         print(f"morphosim bench: error: {exc}", file=sys.stderr)
         return EXIT_NOT_RUN
@@ -124,17 +124,3 @@ def _quality(args: argparse.Namespace) -> int:
     from .quality import quality_main
 
     return quality_main(args)
-
-
-def _grounding_for_sweep(args: argparse.Namespace) -> bool:
-    """Whether the sweep refuses substituted prompt words ("exact"); another level asked for is set as
-    `$MORPHOSIM_GROUNDING` for this process and the workers it starts."""
-    import os
-
-    from ..language.grounding import LEVEL_VAR
-
-    level = grounding_from_args(args)
-    if level is not None and level != "exact":
-        os.environ[LEVEL_VAR] = level
-    return level == "exact"
-

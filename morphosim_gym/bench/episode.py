@@ -128,24 +128,26 @@ def _text(exc: BaseException) -> str:
 
 
 def _substitutes(sim: Any, prompt: str) -> bool:
-    """Whether the parse of `prompt` substitutes a word (what strict mode refuses)."""
+    """Whether the parse of `prompt` substitutes a word (what grounding "exact" refuses)."""
     from morphosim_gym.language.substitutions import plan_substitutions
 
     return bool(plan_substitutions(sim.parser.parse(prompt)))
 
 
-def make_sim(suite: Suite, cache_dir: Optional[str], strict: bool = False) -> Any:
+def make_sim(suite: Suite, cache_dir: Optional[str], grounding: Optional[str] = None) -> Any:
     """The `MorphoSim` of the suite's worlds (`suite.world` over the envs' default,
     `envs.config.DEFAULT_SIM_CONFIG`), caching generated clips and scenes (and, for fit worlds,
-    reconstructions) on disk under `cache_dir` (None = default); `strict` makes a substituted word a
-    `CommandError`."""
+    reconstructions) on disk under `cache_dir` (None = default), parsing at the grounding level
+    `grounding` (`SimConfig.grounding`; None: the one in force; "exact" makes a substituted word a
+    `CommandError`)."""
     from dataclasses import replace
 
     from morphosim_gym.pipeline import MorphoSim
 
     from .suite import world_sim_config
 
-    return MorphoSim(replace(world_sim_config(suite.world), cache=True, cache_dir=cache_dir, strict=strict))
+    return MorphoSim(replace(world_sim_config(suite.world), cache=True, cache_dir=cache_dir,
+                             grounding=grounding))
 
 
 class EpisodeRunner:
@@ -154,14 +156,18 @@ class EpisodeRunner:
     Args:
         suite: the suite.
         cache_dir: the scene cache shared by all workers (None = `MorphoSim`'s default).
-        strict: a scene prompt whose words the library substitutes ("kangaroo" -> duck) fails its
-            episodes at the "scene" stage with the `CommandError` (`SimConfig.strict`).
+        grounding: the grounding level of the scene prompts (`SimConfig.grounding`, one of
+            `language.grounding.LEVELS`; None: the one in force). Under "exact" a prompt whose words
+            the library substitutes ("kangaroo" -> a stand-in) fails its episodes at the "scene"
+            stage with the `CommandError`.
     """
 
-    def __init__(self, suite: Suite, cache_dir: Optional[str] = None, strict: bool = False) -> None:
+    def __init__(self, suite: Suite, cache_dir: Optional[str] = None, grounding: Optional[str] = None) -> None:
+        from morphosim_gym.language.grounding import grounding_level
+
         self.suite = suite
-        self.strict = strict
-        self.sim = make_sim(suite, cache_dir, strict)
+        self.grounding = grounding_level(grounding)
+        self.sim = make_sim(suite, cache_dir, self.grounding)
         self._env: Any = None
 
     @property
@@ -177,12 +183,13 @@ class EpisodeRunner:
         return self._env
 
     def prepare(self, seed: int) -> str:
-        """Generate (or load) the scene of episode `seed` into the cache; returns its prompt. In strict
-        mode a prompt with a substitution is skipped here: its episodes record the `CommandError`."""
+        """Generate (or load) the scene of episode `seed` into the cache; returns its prompt. Under
+        grounding "exact" a prompt with a substitution is skipped here: its episodes record the
+        `CommandError`."""
         from morphosim_gym.envs.pool import build_one
 
         ep = sample_episode(self.suite, seed)
-        if self.strict and _substitutes(self.sim, ep.request.prompt):
+        if self.grounding == "exact" and _substitutes(self.sim, ep.request.prompt):
             return ep.request.prompt
         build_one(self.sim, ep.request.prompt, ep.scene_seed)      # one thread, as the envs' pools build
         return ep.request.prompt

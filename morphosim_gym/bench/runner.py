@@ -20,6 +20,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from ..language.grounding import DEFAULT_LEVEL, grounding_level
 from ..policies import resolve_policy
 from .backends import BACKENDS, Job, run_backend
 from .episode import EpisodeKey, EpisodeRunner
@@ -59,9 +60,14 @@ def _png(frames: np.ndarray) -> bytes:
     return iio.imwrite("<bytes>", np.concatenate(list(frames), axis=1), extension=".png")
 
 
-def _check_manifest(out: Path, suite: Suite, strict: bool) -> None:
+def _manifest_level(manifest: dict) -> str:
+    """The grounding level a sweep's manifest records (older manifests: a `strict` flag)."""
+    return manifest.get("grounding") or ("exact" if manifest.get("strict") else DEFAULT_LEVEL)
+
+
+def _check_manifest(out: Path, suite: Suite, grounding: str) -> None:
     path = out / MANIFEST
-    mine = {"suite": suite.name, "digest": suite.digest(), "env": suite.env_id, "strict": strict}
+    mine = {"suite": suite.name, "digest": suite.digest(), "env": suite.env_id, "grounding": grounding}
     if path.exists():
         try:
             theirs = json.loads(path.read_text())
@@ -71,9 +77,9 @@ def _check_manifest(out: Path, suite: Suite, strict: bool) -> None:
             raise SuiteError(f"{out} holds results of suite {theirs.get('suite')!r} with other settings (digest "
                              f"{theirs.get('digest')} vs {mine['digest']}); resume only the same suite, or use "
                              f"another --out")
-        if bool(theirs.get("strict", False)) != strict:
-            raise SuiteError(f"{out} holds results of a sweep run with strict={not strict}; resume it with the same "
-                             f"--strict setting, or use another --out")
+        if _manifest_level(theirs) != grounding:
+            raise SuiteError(f"{out} holds results of a sweep run with grounding {_manifest_level(theirs)!r} (this "
+                             f"one: {grounding!r}); resume it with the same --grounding, or use another --out")
         return
     atomic_write_bytes(path, (json.dumps(mine, indent=2) + "\n").encode())
 
@@ -88,9 +94,15 @@ def _check_env(suite: Suite, cache_dir: Optional[str]) -> None:
 
 def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: str = "local", workers: int = 1,
               cache_dir: Optional[str] = None, address: Optional[str] = None, progress: bool = True,
-              report: bool = True, strict: bool = False) -> SweepResult:
-    """Run (or resume) a sweep of `suite` for each policy spec and write its outputs to `out`. With
-    `strict`, an episode whose scene prompt has a substituted word fails with the `CommandError`."""
+              report: bool = True, grounding: Optional[str] = None, strict: bool = False) -> SweepResult:
+    """Run (or resume) a sweep of `suite` for each policy spec and write its outputs to `out`.
+    `grounding`: the grounding level of the scene prompts (`language.grounding.LEVELS`; None: the
+    one in force), recorded in the manifest and carried to every worker; under "exact" an episode
+    whose scene prompt has a substituted word fails with the `CommandError`. `strict`: deprecated
+    alias of ``grounding="exact"``."""
+    if strict and grounding not in (None, "exact"):
+        raise ValueError(f"Expected strict=True only with grounding None or 'exact', found {grounding!r}")
+    grounding = grounding_level("exact" if strict else grounding)
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
     if not policies or len(set(policies)) != len(policies):
@@ -100,7 +112,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
     _check_env(suite, cache_dir)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    _check_manifest(out, suite, strict)
+    _check_manifest(out, suite, grounding)
     start = time.perf_counter()
     store = ResultStore(out / RESULTS_LOG)
     done = store.load()
@@ -111,7 +123,7 @@ def run_sweep(suite: Suite, policies: Sequence[str], out: str | Path, backend: s
     bar = _progress(len(plan), len(plan) - len(pending), suite.name, backend) if progress else None
     failed = sum(done[k.id]["status"] != "ok" for k in plan if k.id in done)
     with store:
-        for res in run_backend(backend, suite, seeds, jobs, cache_dir, workers, address, strict):
+        for res in run_backend(backend, suite, seeds, jobs, cache_dir, workers, address, grounding):
             key = EpisodeKey(res.record["policy"], res.record["perturbation"], res.record["seed"])
             if res.frames is not None:
                 atomic_write_bytes(frames_path(out, key), _png(res.frames))

@@ -155,3 +155,108 @@ def test_on_real_footage_layers_beat_holding_the_previous_frame():
         ours.append(psnr((_rgb(scene, clip, k / clip.fps) * 255).round(), full.frames[o]))
         hold.append(psnr(full.frames[o - 1], full.frames[o]))
     assert np.mean(ours) > np.mean(hold), (ours, hold)
+
+
+def _with_big_background_gaussian(clip: GeneratedClip, row: int, behind: float, size: float) -> Scene4D:
+    """The stub fit plus one large cyan background Gaussian centred behind the ground at pixel (W/2, row)
+    (by `behind` times its depth): the centre is behind the plate there, its extent reaches farther ground."""
+    fitted = _fitted(clip)
+    cam = clip.cameras[0]
+    z = float(ground_plane_depth(cam)[row, W // 2]) * behind
+    centre = cam.unproject(np.array([W / 2, row + 0.5]), np.float64(z))
+    g0 = fitted.gaussians
+    g = Gaussians(means=np.vstack([g0.means, centre]), quats=np.tile([1.0, 0, 0, 0], (3, 1)),
+                  scales=np.vstack([g0.scales, np.full((1, 3), size)]), opacities=[0.5, 0.5, 0.95],
+                  colors=np.vstack([g0.colors, [[0.0, 1.0, 1.0]]]), features=np.vstack([g0.features, [[1.0, 0.0]]]),
+                  object_ids=[0, 1, 0])
+    return Scene4D(g, Motion.static(3, clip.num_frames), fitted.objects, clip.fps, fitted.cameras)
+
+
+def test_fitted_gaussians_that_cover_the_plate_in_the_input_view_are_dropped():
+    clip, pri = _clip()
+    row = H - 6
+    fitted = _with_big_background_gaussian(clip, row, 1.15, 0.3)
+    depth = ground_plane_depth(clip.cameras[0])
+    assert depth[row - 6, W // 2] > depth[row, W // 2] * 1.15        # it covers farther ground above its centre
+    band = (slice(row - 11, row - 6), slice(W // 2 - 3, W // 2 + 3))
+    for keep in (False, True):
+        scene = motion_layers(fitted, clip, priors=pri, config=LayerConfig(drop_occluders=not keep, refine_rounds=0))
+        err = np.abs(_rgb(scene, clip, 0.0)[band] - clip.frames[0][band] / 255.0).mean()
+        assert (err > 0.06) if keep else (err < 0.035), (keep, err)
+    assert len(motion_layers(fitted, clip, priors=pri).gaussians) < len(
+        motion_layers(fitted, clip, priors=pri, config=LayerConfig(drop_occluders=False)).gaussians)
+
+
+def test_layers_carry_only_the_movers_pixels_not_the_background_their_masks_cover():
+    clip, pri = _clip()
+    import cv2
+
+    wide = np.stack([cv2.dilate(m.astype(np.uint8), np.ones((7, 7), np.uint8)) for m in pri.masks]).astype(np.int32)
+    pri = LayerPriors(wide, pri.depth, pri.movers)               # masks 3 px wider than the square
+    k = 1
+    truth = clip.frames[0].copy()                                # the frame half-way between k and k + 1
+    truth[:] = np.where(pri.masks[0][..., None] > 0, clip.frames[-1], clip.frames[0])   # background there
+    x0 = 8 + STEP * k + STEP // 2
+    truth[ROW:ROW + SIDE, x0:x0 + SIDE] = (230, 20, 20)
+    margin = (slice(ROW - 3, ROW - 1), slice(x0, x0 + SIDE))     # above the square, inside both masks
+    assert np.all(wide[k][margin] > 0) and np.all(wide[k + 1][margin] > 0)
+    for level, ok in ((LayerConfig().plate_level, True), (-1.0, False)):
+        scene = motion_layers(_fitted(clip), clip, priors=pri, config=LayerConfig(plate_level=level))
+        err = np.abs(_rgb(scene, clip, (k + 0.5) / clip.fps)[margin] - truth[margin] / 255.0).mean()
+        assert (err < 0.03) if ok else (err > 0.05), (level, err)
+
+
+def test_a_pixel_a_mover_covers_in_every_frame_still_gets_a_plate():
+    clip, pri = _clip()
+    masks = pri.masks.copy()
+    masks[:, 8:14, 50:56] = 1                                    # a still "mover" masked in every frame
+    pri = LayerPriors(masks, pri.depth, pri.movers)
+    scene = motion_layers(_fitted(clip), clip, priors=pri)
+    for k in (0, T - 1):
+        img = _rgb(scene, clip, k / clip.fps)
+        assert np.abs(img[9:13, 51:55] - clip.frames[k][9:13, 51:55] / 255.0).mean() < 0.05
+
+
+def test_layers_of_a_small_mover_decode_as_it_and_an_edit_of_it_selects_them():
+    """The fit's person Gaussians mostly learned a road-heavy blend (as a few walkers over a large
+    street do): the layers take the latent that reads as "person", so recolouring the person
+    changes the layers (the mean latent would read as "road" and select nothing)."""
+    import morphosim_gym as ms
+    from morphosim_gym.language import embeddings
+
+    clip, pri = _clip()
+    road, person = embeddings.embed(["road", "person"])
+    d = len(road)
+    feats = np.stack([road, 0.75 * road + 0.25 * person, 0.75 * road + 0.25 * person, person])
+    g = Gaussians(means=np.array([[0.0, 3.0, 0.0], [0.0, 3.0, 0.3], [0.05, 3.0, 0.3], [0.1, 3.0, 0.3]]),
+                  quats=np.tile([1.0, 0, 0, 0], (4, 1)), scales=np.full((4, 3), 0.01), opacities=np.full(4, 0.5),
+                  colors=np.full((4, 3), 0.5), features=feats, object_ids=[0, 1, 1, 1])
+    objects = (SceneObject(0, "road", "road", role="background"), SceneObject(1, "person", "person"))
+    decoder = ms.scene.FeatureDecoder("semantic", [np.eye(d)], [np.zeros(d)], normalize=True)
+    fitted = Scene4D(g, Motion.static(4, clip.num_frames), objects, clip.fps, (clip.cameras[0],),
+                     decoders={"semantic": decoder})
+    scene = motion_layers(fitted, clip, priors=pri)
+    ids = np.asarray(scene.gaussians.object_ids)
+    sim = decoder.similarity(np.asarray(scene.gaussians.features)[ids == 1], embeddings.embed(["road", "person"]))
+    assert np.all(sim[:, 1] > sim[:, 0])
+    red = ms.MorphoSim().edit(scene, "make the person red")
+    changed = np.any(np.asarray(red.gaussians.colors) != np.asarray(scene.gaussians.colors), axis=1)
+    assert changed.sum() >= 0.9 * (ids == 1).sum() and not changed[ids == 0].any()
+
+
+def test_a_fast_mover_is_found_beyond_the_fixed_window_from_its_coarse_match():
+    """A 10 px square moving 14 px a frame, searched +- 8 px: found only around its half-resolution match."""
+    from morphosim_gym.reconstruct.video_layers import coarse_guesses
+
+    rng = np.random.default_rng(1)
+    tex = np.repeat(np.repeat(rng.integers(60, 200, (H // 4, W // 4, 3), dtype=np.uint8), 4, 0), 4, 1)
+    frames, labels = np.stack([tex, tex]), np.zeros((H, W), np.int32)
+    for i, x in enumerate((10, 24)):
+        frames[i, ROW:ROW + SIDE, x:x + SIDE] = (230, 20, 20)
+    labels[ROW:ROW + SIDE, 10:10 + SIDE] = 1
+    guess = coarse_guesses(frames, 0, 1, labels, 1, search=8)
+    assert np.abs(guess[0] - [14, 0]).max() <= 2                     # a rough guess
+    assert region_flows(frames, 0, 1, labels, 1, search=8, guess=guess)[0] == pytest.approx([14, 0], abs=0.5)
+    assert np.abs(region_flows(frames, 0, 1, labels, 1, search=8)[0][0] - 14) > 5
+    with pytest.raises(ValueError, match="guess"):
+        region_flows(frames, 0, 1, labels, 1, guess=np.zeros((2, 2)))
