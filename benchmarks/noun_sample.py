@@ -6,12 +6,14 @@ assets on, for judging by a person (issue #19: the share a person would accept).
     .venv/bin/python benchmarks/noun_sample.py --seed 2027 --n 60 --exclude-seed 19 --exclude-n 50   # held out
     .venv/bin/python benchmarks/noun_sample.py --seed 4099 --n 60 --exclude-seed 19 --exclude-n 50 \
         --exclude-seed 2027 --exclude-n 60                                                           # third
+    .venv/bin/python benchmarks/noun_sample.py --nouns benchmarks/noun_dev.txt                       # a whole list
 
 The sample is drawn from the list by `numpy.random.default_rng(seed)` before anything resolves
 (`--exclude-seed`: first leave out the nouns of an earlier sample, so the new one is held out).
 Each row: the noun, what it grounds to (a category, a shape, or "asset:<id>" with the asset's
 name), the method ("kind": a stand-in of the same kind) and similarity, or the refusal with its
-nearest candidates. `--grounding` sets the grounding level (default: the library's, "kind").
+nearest candidates. `--nouns FILE` resolves every noun of FILE in its order instead of drawing
+(the dev list `benchmarks/noun_dev.txt`: nouns outside the 300 list, seen data). `--grounding` sets the grounding level (default: the library's, "kind").
 """
 
 from __future__ import annotations
@@ -28,8 +30,23 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 NOUNS = Path(__file__).resolve().parents[1] / "tests" / "language" / "nouns_300.txt"
 
 
+def read_nouns(path: Path) -> list[str]:
+    """The nouns of a list file: one a line, blank lines and "#" comments skipped.
+
+    Raises:
+        SystemExit: the file is missing or holds no noun (the message names it).
+    """
+    try:
+        nouns = [x.strip() for x in path.read_text().splitlines() if x.strip() and not x.startswith("#")]
+    except OSError as exc:
+        raise SystemExit(f"Expected a readable noun list, found {path}: {exc}") from exc
+    if not nouns:
+        raise SystemExit(f"Expected at least one noun in {path}, found none")
+    return nouns
+
+
 def all_nouns() -> list[str]:
-    return [x.strip() for x in NOUNS.read_text().splitlines() if x.strip() and not x.startswith("#")]
+    return read_nouns(NOUNS)
 
 
 def draw(seed: int, n: int, exclude: tuple[int, int] | list[tuple[int, int]] | None = None) -> list[str]:
@@ -75,6 +92,8 @@ def main() -> int:
                          "order they were drawn; each was drawn without the ones before it)")
     ap.add_argument("--exclude-n", type=int, action="append", default=[], help="... of this size (one per "
                     "--exclude-seed; default 50)")
+    ap.add_argument("--nouns", type=Path, default=None,
+                    help="resolve every noun of this file (one a line, '#' comments) instead of drawing a sample")
     ap.add_argument("--grounding", default=None, help="grounding level (default: the library's)")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
@@ -83,9 +102,15 @@ def main() -> int:
                  f"{len(args.exclude_seed)}")
     sizes = args.exclude_n + [50] * (len(args.exclude_seed) - len(args.exclude_n))
     exclude = list(zip(args.exclude_seed, sizes))
-    sample = draw(args.seed, args.n, exclude)
-    held = "".join(f", without the seed-{s} sample" for s, _ in exclude)
-    print(f"sample (seed {args.seed}, {args.n}{held}): {', '.join(sample)}")
+    if args.nouns is not None:
+        if exclude:
+            ap.error("Expected --nouns without --exclude-seed (a whole list is not drawn), found both")
+        sample = read_nouns(args.nouns)
+        print(f"list {args.nouns} ({len(sample)} nouns): {', '.join(sample)}")
+    else:
+        sample = draw(args.seed, args.n, exclude)
+        held = "".join(f", without the seed-{s} sample" for s, _ in exclude)
+        print(f"sample (seed {args.seed}, {args.n}{held}): {', '.join(sample)}")
     if args.draw_only:
         return 0
     os.environ.pop("MORPHOSIM_ASSET_SOURCES", None)
@@ -106,7 +131,8 @@ def main() -> int:
             print(f"  {r['noun']:18s} -> {r['result']}{' (' + r['asset_name'] + ')' if 'asset_name' in r else ''}"
                   f" [{r.get('method', '')}{sim}]{' STAND-IN' if r.get('stand_in') else ''}")
     if args.json:
-        args.json.write_text(json.dumps({"seed": args.seed, "exclude": [list(e) for e in exclude], "grounding": level, "sample": sample,
+        args.json.write_text(json.dumps({"seed": None if args.nouns else args.seed,
+                                         "nouns_file": str(args.nouns) if args.nouns else None, "exclude": [list(e) for e in exclude], "grounding": level, "sample": sample,
                                          "rows": rows}, indent=1) + "\n")
     return 0
 
