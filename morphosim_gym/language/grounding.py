@@ -46,6 +46,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..colors import is_color_word
 from ..errors import AmbiguousTargetError, CommandError, TargetNotFoundError
 from . import embeddings, hypernyms, open_vocab, wordnet
 from .open_vocab import is_open_category as is_open
@@ -145,18 +146,53 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
             nearest candidates.
     """
     noun = noun.strip().lower()
+    # a compound WordNet knows ("sewing machine") is not shown by any asset of its head ("Coffee machine"),
+    # nor by the vocabulary's category of its head when it names another thing ("hot dog" is no dog)
+    compound = hypernyms.compound_tail(phrase) if phrase and phrase != noun else None
     hit = ground_noun_vocabulary(noun, settings) or ground_noun_vocabulary(singular(noun), settings)
-    if hit is not None:
+    if hit is not None and not (compound and hit.kind == "category"
+                                and hypernyms.names_other_thing(compound, hit.category)):
         return hit
     if open_vocab.shape_for_word(noun):                                   # open vocabulary: basic shapes
         return Grounding(noun, open_vocab.shape_for_word(noun))
-    # a compound WordNet knows ("sewing machine") is not shown by any asset of its head ("Coffee machine")
-    compound = phrase if phrase and phrase != noun and wordnet.senses(phrase, 1) else None
-    named = _named_asset(noun, phrase, compound is not None)
+    mods = () if compound else _noun_modifiers(phrase or noun)
+    named = _named_asset(noun, compound or phrase, compound is not None or bool(mods))
     if named is not None:
         return named
     floor = _default_floor(noun) if floor is None else floor
-    return _ground_by_level(noun, phrase, settings, floor, kind_noun=compound or noun)
+    with _modifiers(mods):
+        return _ground_by_level(noun, phrase, settings, floor, kind_noun=compound or noun)
+
+
+# the noun modifiers of the phrase being grounded (`_noun_modifiers`), for `_shows_modifiers`
+_MODS: ContextVar[tuple[str, ...]] = ContextVar("morphosim_grounding_modifiers", default=())
+
+
+@contextmanager
+def _modifiers(mods: tuple[str, ...]) -> Iterator[None]:
+    token = _MODS.set(mods)
+    try:
+        yield
+    finally:
+        _MODS.reset(token)
+
+
+def _noun_modifiers(phrase: str) -> tuple[str, ...]:
+    """The words before the head of a phrase WordNet does not know whole that are nouns themselves,
+    not colours ("stop" of "stop sign", "rice" of "rice cooker"; not "red", nor "wooden"): such a
+    phrase names a kind of its head that a sibling kind does not show ("Emergency sign", "Water cooler")."""
+    words = phrase.lower().split()[:-1]
+    return tuple(w for w in words if w.isalpha() and not is_color_word(w) and wordnet.senses(w, 1))
+
+
+def _shows_modifiers(text: str) -> bool:
+    """Whether a candidate's name can show the phrase being grounded: it holds the phrase's noun
+    modifiers, or it is its head alone (a general "Sign" may show a stop sign, "Emergency sign" not)."""
+    mods = _MODS.get()
+    if not mods:
+        return True
+    words = open_vocab.name_words(text)
+    return set(mods) <= words or len(re.findall(r"[a-z]+", text.lower().removeprefix("a "))) <= 1
 
 
 def _ground_by_level(noun: str, phrase: str | None, settings: bool, floor: float, kind_noun: str) -> Grounding:
@@ -267,6 +303,8 @@ def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_n
     for (kind_, label), (sim, text) in sorted(pool.items(), key=lambda kv: -kv[1][0]):
         if sim < floor:
             break
+        if kind_ == "open" and not _shows_modifiers(text):
+            continue      # "Water cooler" does not show a rice cooker: at most a stand-in
         if sim >= CHECKED_FLOOR or (kind_ != "setting" and hypernyms.related(kind_noun, text)):
             method = "open" if kind_ == "open" else "embedding"
             return Grounding(noun, label, kind="category" if kind_ == "open" else kind_, method=method,
@@ -286,13 +324,15 @@ def _ground_kind(noun: str, phrase: str, kind_noun: str) -> Grounding | None:
     cands = [(c, max(float(sims[i]) for i, lab in enumerate(labels) if lab == ("category", c)), None, c)
              for c in CATEGORIES]
     cands += [(m.category, m.similarity, m.text, None) for m in open_vocab.nearest_candidates(phrase, k=KIND_TOP)]
+    text_of = {label: text for label, _, text, _ in cands}
     for sense in range(hypernyms.noun_sense_count(kind_noun)):   # the dominant sense any candidate shares
         kinds = [(d, -sim, label, name) for label, sim, text, cat in cands
                  for hit in [hypernyms.shared_kind(kind_noun, text=text, category=cat, sense=sense)]
                  if hit is not None for d, name in [hit]]
         if kinds:
             d, neg_sim, label, name = min(kinds)
-            if d == 0:   # the candidate is the noun's own sense or a kind of it ("Small lavatory" for "toilet")
+            cat = label if label in CATEGORIES else None
+            if d == 0 and (cat is not None or _shows_modifiers(text_of[label])):   # the noun's own sense, or a kind of it
                 return Grounding(noun, label, kind="category", method="open" if is_open(label) else "embedding",
                                  similarity=round(-neg_sim, 4))
             return Grounding(noun, label, method="kind", similarity=round(-neg_sim, 4), shared_kind=name)

@@ -21,7 +21,7 @@ from functools import lru_cache
 from . import embeddings, wordnet
 from .vocabulary import singular
 
-__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "head_word", "kind_category", "noun_sense_count", "ranked_senses", "related",
+__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "compound_tail", "head_word", "kind_category", "names_other_thing", "noun_sense_count", "ranked_senses", "related",
            "shared_kind", "visible_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
@@ -106,6 +106,24 @@ def kind_category(noun: str, categories: Iterable[str]) -> str | None:
     hits = [(min(closure[o] for o in offs if o in closure), c)
             for c, offs in ((c, _category_senses(c)) for c in categories) if offs & closure.keys()]
     return min(hits)[1] if hits else None
+
+
+def compound_tail(phrase: str) -> str | None:
+    """The longest tail of two or more words of `phrase` that WordNet knows as a visible thing
+    ("big hot dog" -> "hot dog", "red sewing machine" -> "sewing machine"), else None."""
+    words = phrase.lower().split()
+    for k in range(min(len(words), 4), 1, -1):
+        tail = " ".join(words[-k:])
+        if wordnet.is_visible_noun(tail):
+            return tail
+    return None
+
+
+def names_other_thing(compound: str, category: str) -> bool:
+    """Whether a compound WordNet knows names something that is not a kind of `category` (a
+    generator category its head word names): "hot dog" is food, not a dog; "sheep dog" and
+    "school bus" are kinds of their heads. False without WordNet."""
+    return wordnet.available() and bool(_noun_senses(compound)) and kind_category(compound, [category]) is None
 
 
 def _text_senses(text: str) -> tuple[wordnet.Synset, ...]:

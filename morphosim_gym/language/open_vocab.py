@@ -24,7 +24,7 @@ from .hypernyms import head_word
 from .vocabulary import singular
 
 __all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_named", "ground_open", "has_assets",
-           "is_open_category", "nearest_candidates", "register_candidates", "shape_for_word"]
+           "is_open_category", "name_words", "nearest_candidates", "register_candidates", "shape_for_word"]
 
 ASSET_PREFIX = "asset:"
 OPEN_FLOOR = 0.5          # cosine similarity an open candidate needs (made-up words stay below ~0.45)
@@ -113,6 +113,11 @@ def _words(text: str) -> set[str]:
     vocabulary's ("sunglasses" -> "sunglass")."""
     words = set(re.findall(r"[a-z0-9]+", text.lower()))
     return words | {w[:-1] for w in words if len(w) > 3 and w.endswith("s")} | {singular(w) for w in words}
+
+
+def name_words(text: str) -> set[str]:
+    """A candidate text's words with their singulars ("Sun glasses" -> sun, glass, glasses...)."""
+    return _words(text)
 
 
 def ground_open(phrase: str, floor: float = OPEN_FLOOR) -> OpenMatch | None:

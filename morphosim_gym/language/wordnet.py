@@ -15,8 +15,8 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["DEFAULT_DIR", "PHYSICAL_LEXFILES", "Synset", "available", "hypernym_closure", "sense_counts", "senses",
-           "synset"]
+__all__ = ["DEFAULT_DIR", "PHYSICAL_LEXFILES", "Synset", "available", "hypernym_closure", "is_visible_noun",
+           "sense_counts", "senses", "synset"]
 
 DEFAULT_DIR = "/usr/share/wordnet"
 ENV_VAR = "MORPHOSIM_WORDNET"
@@ -122,6 +122,13 @@ def senses(noun: str, limit: int | None = None) -> list[Synset]:
         line = _index_line(key.replace("_", "-"))
     offsets = _offsets(line) if line else ()
     return [s for s in (synset(o) for o in offsets[:limit]) if s is not None]
+
+
+def is_visible_noun(noun: str) -> bool:
+    """Whether WordNet knows `noun` (or its "-s"/"-es" singular) as a thing one can see (a sense in
+    `PHYSICAL_LEXFILES`); False without WordNet. Reads no embedding model."""
+    forms = [noun] + ([noun[:-1]] if noun.endswith("s") else []) + ([noun[:-2]] if noun.endswith("es") else [])
+    return any(s.lexfile in PHYSICAL_LEXFILES for f in forms for s in senses(f))
 
 
 def _counts_table() -> dict[str, dict[int, int]]:

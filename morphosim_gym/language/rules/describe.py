@@ -187,7 +187,9 @@ class DescriptionReader:
         """The objects the subjects name (settings they name go to `settings`)."""
         objs: list[ObjectDraft] = []
         for np_ in subjects:
-            if np_.kind == "setting":
+            if np_.kind == "setting" and np_.det in ("a", "an") and noun_to_category(np_.head) is not None:
+                objs.append(self._object_from_np(np_, subject=True))   # "a desk": a thing, not the table setting
+            elif np_.kind == "setting":
                 if np_.head == "table" or np_.category:
                     settings.append(np_.category)
             elif np_.kind == "pronoun":

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from ...colors import match_color
+from ...colors import is_color_word, match_color
 from ..grounding import ALL_WORDS, CAMERA_WORDS
 from ..lexicon import (
     AUX,
@@ -75,11 +75,14 @@ def parse_np(toks: Sequence[str], i: int, edit: bool = False) -> NounPhrase | No
     np_.head = toks[head_i]
     np_.start, np_.end = i, head_i + 1
     np_.words = list(toks[i:head_i + 1])
+    whole = len(collected) >= 2 and collected[-2] == head_i - 1 and compound_noun(toks[head_i - 1], np_.head)
     for k in collected[:-1]:
         s = word_to_setting(toks[k])
-        if s is not None and noun_to_category(toks[k]) is None:
-            np_.settings.append(s)
+        if s is not None and noun_to_category(toks[k]) is None and not (whole and k == head_i - 1):
+            np_.settings.append(s)   # "a dog in snowy fields", not the "ice" of "an ice cream"
     _classify_head(np_)
+    if whole and np_.kind == "category" and hypernyms.names_other_thing(f"{toks[head_i - 1]} {np_.head}", np_.category):
+        np_.kind, np_.category = "unknown", None   # "a hot dog" is food: grounded whole, not as the dog
     return np_
 
 
@@ -141,6 +144,11 @@ def _phrase_words(toks: Sequence[str], j: int, np_: NounPhrase, edit: bool) -> l
             continue
         if _next_phrase_starts(toks, j, collected, known_head):
             break
+        if collected and collected[-1] == j - 1 and compound_noun(toks[j - 1], toks[j]):
+            collected.append(j)      # the second word of a compound noun: "ice cream" (not the colour cream)
+            known_head = known_head or _is_known_noun(toks[j], edit)
+            j += 1
+            continue
         col = match_color(toks, j)
         if col is not None:
             after = toks[j + col[2]] if j + col[2] < n else None
@@ -196,7 +204,7 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
     if not stop_word(w) or (w in SPEED_WORDS_1 and nxt is not None and not stop_word(nxt)):
         return False
     after = toks[j + 2] if j + 2 < len(toks) else None
-    if _noun_not_verb(w, nxt, np_, [toks[k] for k in collected]):
+    if _noun_not_verb(w, nxt, np_, [toks[k] for k in collected], after):
         return False
     if np_.det is not None and w in VERBS and nxt is not None and not stop_word(nxt) and not known_word(nxt) \
             and (after in VERBS or after in AUX):
@@ -210,12 +218,17 @@ def _ends_phrase(toks: Sequence[str], j: int, np_: NounPhrase, collected: list[i
     return True
 
 
-def _noun_not_verb(w: str, nxt: str | None, np_: NounPhrase, collected: list[str]) -> bool:
-    """A stop word that is a noun here: the second word of a compound noun WordNet knows ("a frying
-    pan", not the camera's pan), or a verb that is a visible thing alone after an article ("a swing",
-    "a swing sways")."""
+def _noun_not_verb(w: str, nxt: str | None, np_: NounPhrase, collected: list[str], after: str | None = None) -> bool:
+    """A stop word that is a noun here: a word of a compound noun WordNet knows ("a frying pan", not
+    the camera's pan; "a parking meter"), a verb before a visible noun that ends the phrase ("a stop
+    sign"), or a verb that is a visible thing alone after an article ("a swing", "a swing sways")."""
     if collected and compound_noun(collected[-1], w):
         return True
+    if np_.det is not None and nxt is not None and compound_noun(w, nxt):
+        return True          # the first word of a compound noun: "a parking meter", "a swing seat"
+    if np_.det is not None and w in VERBS and all(is_color_word(c) or c in SIZE_WORDS for c in collected) \
+            and nxt is not None and not stop_word(nxt) and wordnet.is_visible_noun(nxt) and (after is None or stop_word(after)):
+        return True          # a verb modifying a noun that ends the phrase: "a stop sign", "a red stop sign on the road"
     return bool(np_.det is not None and not collected and w in VERBS and (nxt is None or nxt in VERBS or nxt in AUX)
                 and hypernyms.ranked_senses(w))
 

@@ -7,7 +7,9 @@ from typing import Any
 
 from ...errors import CommandError
 from ..grounding import SceneItem, scene_items
-from ..lexicon import AUX, COMPOUNDS, EXAMPLES, VERBS, correct_typo
+from ...colors import is_color_word
+from .. import wordnet
+from ..lexicon import AUX, COMPOUNDS, DETS, EXAMPLES, INTENSIFIERS, NUMBER_WORDS, SIZE_WORDS, VERBS, correct_typo
 from ..plan import CameraSpec, EditOp, MotionSpec, ObjectSpec, Plan
 from ..sequence import motion_stages
 from ..vocabulary import CATEGORIES, DEFAULT_SETTING
@@ -15,7 +17,7 @@ from .describe import DescriptionReader, ObjectDraft
 from .nouns import compound_noun
 from .segments import camera_decl_to_edit, classify, split_segments
 from .targets import TargetResolver
-from .tokens import detok, known_word, tokenize
+from .tokens import detok, is_number, known_word, tokenize
 
 __all__ = ["MAX_TEXT_CHARS", "RuleParser", "parse_rules"]
 
@@ -43,8 +45,8 @@ class RuleParser(DescriptionReader, TargetResolver):
     # ---- entry -------------------------------------------------------------------------------------
     def parse(self) -> Plan:
         toks = tokenize(self.text)
-        toks = [w if _in_compound_noun(toks, k) else self._fix_typo(w, toks[k + 1] if k + 1 < len(toks) else None)
-                for k, w in enumerate(toks)]
+        toks = [w if _in_compound_noun(toks, k) or _visible_noun_slot(toks, k)
+                else self._fix_typo(w, toks[k + 1] if k + 1 < len(toks) else None) for k, w in enumerate(toks)]
         segments = split_segments(toks)
         if not segments:
             raise CommandError(f"Could not understand {self.text!r}: no words found. Try e.g. " + ", ".join(EXAMPLES))
@@ -107,6 +109,19 @@ def _in_compound_noun(toks: Sequence[str], k: int) -> bool:
     """Whether word k and a neighbour form a compound noun WordNet knows ("frying pan", "go kart"):
     then it is no typo of a parser word ("flying", "dart")."""
     return any(compound_noun(*toks[j:j + 2]) for j in (k - 1, k) if j >= 0 and j + 1 < len(toks))
+
+
+def _visible_noun_slot(toks: Sequence[str], k: int) -> bool:
+    """Whether word k is a thing WordNet knows where a noun stands, after a determiner or a number and
+    any colour or size words ("a freezer", "two red mopeds"): then it is no typo of a parser word
+    ("freeze", "moved"); a word elsewhere still is ("make the cube bleu")."""
+    w = toks[k]
+    if not w.isalpha() or len(w) < 4 or known_word(w) or not wordnet.is_visible_noun(w):
+        return False
+    j = k - 1
+    while j >= 0 and (is_color_word(toks[j]) or toks[j] in SIZE_WORDS or toks[j] in INTENSIFIERS):
+        j -= 1
+    return j >= 0 and (toks[j] in DETS or is_number(toks[j]) or toks[j] in NUMBER_WORDS)
 
 
 def parse_rules(text: str, scene: Any = None, require_scene: bool = False) -> Plan:
