@@ -30,7 +30,7 @@ def test_typos_elsewhere_are_still_repaired():
     assert plan.edits[0].color.name == "blue"
 
 
-@pytest.mark.parametrize("text,noun", [("a parking meter", "meter"), ("a stop sign", "sign"),
+@pytest.mark.parametrize("text,noun", [("a parking meter", "meter"), ("an old parking meter", "meter"), ("a stop sign", "sign"),
                                        ("a red stop sign on the road", "sign")])
 def test_a_verb_before_a_noun_is_part_of_the_noun(text, noun):
     assert _nouns(text) == [noun]
