@@ -1,7 +1,8 @@
 """`AssetIndex`: every asset of every source, built once and cached on disk as JSON.
 
 The cache holds one entry per source, keyed by a hash of the source's file stats (path, size,
-mtime), so a changed or newly installed source is re-read and the others are not.
+mtime) and of its `selection` when it has one (the tables a source picks its assets by), so a
+changed or newly installed source, or a changed selection, is re-read and the others are not.
 """
 
 from __future__ import annotations
@@ -38,8 +39,11 @@ def _source_key(src: AssetSource) -> str:
 
 
 def _fingerprint_hash(src: AssetSource) -> str:
+    """The source's cache key: its file stats and, for a source that picks its assets by tables in
+    the code (0 A.D.), its `selection` string, so that a changed table re-reads the unchanged files."""
     stats = [list(s) for s in src.fingerprint()]
-    return hashlib.sha256(json.dumps([INDEX_VERSION, _source_key(src), stats]).encode()).hexdigest()
+    selection = str(getattr(src, "selection", ""))
+    return hashlib.sha256(json.dumps([INDEX_VERSION, _source_key(src), stats, selection]).encode()).hexdigest()
 
 
 def _read_cache(path: Path) -> dict:

@@ -141,3 +141,25 @@ def test_real_0ad_animals_and_props(tmp_path):
     g = asset_gaussians(tiger, budget=2000, cache=ConversionCache(tmp_path / "conv"))
     assert 1.8 < float(np.ptp(g.means[:, 1])) < 3.0            # about 2.4 m nose to tail, along y
     assert float(np.std(g.colors)) > 0.05                      # textured, not one flat colour
+
+
+def test_an_edited_selection_table_rereads_the_archive(tmp_path, monkeypatch):
+    """The archive is unchanged, but a table of what to take from it grew: the cached index is stale."""
+    import morphosim_gym.assets.sources.zero_ad as zero_ad
+
+    members = _tiger_members()
+    members["art/actors/fungi/tall_agaric.xml"] = ACTOR.encode()
+    src = ZeroADSource(_archive(tmp_path / "public.zip", members))
+    monkeypatch.setattr(zero_ad, "NAMED", {})
+    assert [r.name for r in AssetIndex.build([src], cache_dir=tmp_path / "c")] == ["Tiger"]
+    monkeypatch.setattr(zero_ad, "NAMED", {"fungi/mushroom": ("art/actors/fungi/tall_agaric.xml", "Mushroom", "prop",
+                                                              ("toadstool",))})
+    index = AssetIndex.build([src], cache_dir=tmp_path / "c")
+    assert sorted(r.name for r in index) == ["Mushroom", "Tiger"]
+    assert next(r for r in index if r.name == "Mushroom").tags == ("fungi", "toadstool")
+
+
+@pytest.mark.skipif(REAL is None, reason="Debian 0ad-data is not installed (/usr/share/games/0ad/mods/public)")
+def test_real_0ad_named_things(tmp_path):
+    names = {r.name for r in AssetIndex.build([REAL], cache_dir=tmp_path)}
+    assert {"Well", "Mushroom", "Hoe", "Pickaxe", "Pitchfork", "Piglet"} <= names

@@ -5,7 +5,8 @@ read. An actor file (`art/actors/<...>.xml`) names a mesh (`<mesh>skeletal/tiger
 stored converted as `art/meshes/skeletal/tiger.dae.cached.pmd`) and a colour texture (`baseTex`,
 stored as `art/textures/skins/<file>.cached.dds`). The useful subset is chosen by table: one asset
 per animal species (`FAUNA`, by actor) and per kind of prop (`PROPS`, the first actor, by name,
-whose stem holds the keyword; weapons and armour from the unit props, `GEAR`). An actor whose mesh or texture is missing or unreadable is
+whose stem holds the keyword; weapons and armour from the unit props, `GEAR`; single named actors of
+tools, mushrooms, young animals and a few more, `NAMED`). An actor whose mesh or texture is missing or unreadable is
 skipped with an `AssetWarning`; the other assets stay usable.
 
 Units: 0 A.D. models are about 2.5 units to the metre (a horse stands ~5.6 units at the head).
@@ -13,6 +14,8 @@ Units: 0 A.D. models are about 2.5 units to the metre (a horse stands ~5.6 units
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import posixpath
 import re
@@ -26,7 +29,7 @@ from ..pmd import read_pmd
 from ..record import AssetRecord
 from .base import FileStat, file_stats, warn_skip
 
-__all__ = ["DEFAULT_ZIP", "FAUNA", "LICENCE", "PROPS", "UNIT_SCALE", "ZeroADSource", "actor_parts"]
+__all__ = ["DEFAULT_ZIP", "FAUNA", "LICENCE", "NAMED", "PROPS", "UNIT_SCALE", "ZeroADSource", "actor_parts"]
 
 DEFAULT_ZIP = "/usr/share/games/0ad/mods/public/public.zip"
 LICENCE = "CC-BY-SA 3.0 (0 A.D., Wildfire Games)"
@@ -117,6 +120,32 @@ GEAR: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "helmet": ("Helmet", "prop", ("armour", "helm")),
     "hammer": ("Hammer", "prop", ("tool",)),
 }
+# asset id -> (actor, name, category, tags): single actors of things with a plain name (tools, a well,
+# mushrooms, young animals), each looked at in a render (0 A.D.'s plants are alpha-textured cards that
+# render as flat sheets, so none is here); an actor the archive lacks is left out
+NAMED: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
+    "props/well": ("art/actors/props/special/eyecandy/well_1_a.xml", "Well", "prop", ("water well", "wishing well")),
+    "props/woodpile": ("art/actors/props/special/eyecandy/wood_pile.xml", "Woodpile", "prop",
+                       ("logs", "firewood", "log pile")),
+    "props/iceberg": ("art/actors/props/special/eyecandy/iceberg.xml", "Iceberg", "prop", ("ice",)),
+    "props/standing_stones": ("art/actors/props/special/eyecandy/standing_stones.xml", "Standing stone", "prop",
+                              ("menhir", "megalith", "monolith")),
+    "props/sword_rack": ("art/actors/props/special/eyecandy/sword_rack.xml", "Sword rack", "prop", ("rack",)),
+    "tools/hoe": ("art/actors/props/units/tools/hoe.xml", "Hoe", "prop", ("tool", "garden tool")),
+    "tools/mallet": ("art/actors/props/units/tools/mallet.xml", "Mallet", "prop", ("tool", "hammer")),
+    "tools/pickaxe": ("art/actors/props/units/tools/pick.xml", "Pickaxe", "prop", ("pick", "tool")),
+    "tools/pitchfork": ("art/actors/props/units/tools/pitchfork.xml", "Pitchfork", "prop", ("fork", "tool")),
+    "tools/scythe": ("art/actors/props/units/tools/scythe.xml", "Scythe", "prop", ("tool",)),
+    "tools/spade": ("art/actors/props/units/tools/spade.xml", "Spade", "prop", ("shovel", "tool")),
+    "tools/tongs": ("art/actors/props/units/tools/tongs.xml", "Tongs", "prop", ("tool",)),
+    "fungi/mushroom": ("art/actors/fungi/tall_agaric.xml", "Mushroom", "prop", ("toadstool", "fungus", "agaric")),
+    "fungi/chanterelle": ("art/actors/fungi/small_chanterelle.xml", "Chanterelle mushroom", "prop",
+                          ("mushroom", "fungus")),
+    "fauna/piglet": ("art/actors/fauna/piglet.xml", "Piglet", "animal", ("pig",)),
+    "fauna/elephant_calf": ("art/actors/fauna/elephant_african_baby.xml", "Elephant calf", "elephant",
+                            ("baby elephant",)),
+    "fauna/giraffe_calf": ("art/actors/fauna/giraffe_baby.xml", "Giraffe calf", "animal", ("baby giraffe",)),
+}
 PROP_DIRS = ("art/actors/props/special/eyecandy", "art/actors/props")
 GEAR_DIRS = ("art/actors/props/units/weapons", "art/actors/props/units/tools", "art/actors/props/units/helmets",
              "art/actors/props/units/shields")
@@ -182,6 +211,13 @@ class ZeroADSource:
     def __init__(self, archive: str | os.PathLike = DEFAULT_ZIP) -> None:
         self.archive = Path(archive)
 
+    @property
+    def selection(self) -> str:
+        """A digest of the tables that pick the assets (`FAUNA`, `PROPS`, `GEAR`, `NAMED`): part of the
+        index's cache key, so an edited table re-reads the archive."""
+        tables = json.dumps([FAUNA, PROPS, GEAR, NAMED, PROP_DIRS, GEAR_DIRS], sort_keys=True)
+        return hashlib.sha256(tables.encode()).hexdigest()[:16]
+
     @classmethod
     def discover(cls) -> ZeroADSource | None:
         return cls() if Path(DEFAULT_ZIP).is_file() else None
@@ -193,7 +229,7 @@ class ZeroADSource:
         try:
             with zipfile.ZipFile(self.archive) as z:
                 names = set(z.namelist())
-                return self._fauna(z, names) + self._props(z, names)
+                return self._fauna(z, names) + self._props(z, names) + self._named(z, names)
         except (OSError, zipfile.BadZipFile) as exc:
             warn_skip(self.archive, f"not a readable 0 A.D. archive ({type(exc).__name__}: {exc})")
             return []
@@ -204,6 +240,16 @@ class ZeroADSource:
             actor = f"{FAUNA_DIR}/{stem}.xml"
             if actor in names:
                 rec = self._record(z, names, actor, f"fauna/{stem}", name, category, ("animal", *tags))
+                if rec is not None:
+                    out.append(rec)
+        return out
+
+    def _named(self, z: zipfile.ZipFile, names: set[str]) -> list[AssetRecord]:
+        out = []
+        for rid, (actor, name, category, tags) in NAMED.items():
+            if actor in names:
+                kind = "animal" if rid.startswith("fauna/") else rid.split("/", 1)[0].rstrip("s")
+                rec = self._record(z, names, actor, rid, name, category, (kind, *tags))
                 if rec is not None:
                     out.append(rec)
         return out
