@@ -300,12 +300,13 @@ def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_n
         pool.setdefault(labels[i], (float(sims[i]), labels[i][1]))
     for m in open_vocab.nearest_candidates(phrase, k=CHECKED_TOP):
         pool.setdefault(("open", m.category), (m.similarity, m.text))
+    tags = open_vocab.candidate_tags()
     for (kind_, label), (sim, text) in sorted(pool.items(), key=lambda kv: -kv[1][0]):
         if sim < floor:
             break
         if kind_ == "open" and not _shows_modifiers(text):
             continue      # "Water cooler" does not show a rice cooker: at most a stand-in
-        if sim >= CHECKED_FLOOR or (kind_ != "setting" and hypernyms.related(kind_noun, text)):
+        if sim >= CHECKED_FLOOR or (kind_ != "setting" and hypernyms.related(kind_noun, text, tags=tags.get(label, ()))):
             method = "open" if kind_ == "open" else "embedding"
             return Grounding(noun, label, kind="category" if kind_ == "open" else kind_, method=method,
                              similarity=round(sim, 4))
@@ -325,9 +326,11 @@ def _ground_kind(noun: str, phrase: str, kind_noun: str) -> Grounding | None:
              for c in CATEGORIES]
     cands += [(m.category, m.similarity, m.text, None) for m in open_vocab.nearest_candidates(phrase, k=KIND_TOP)]
     text_of = {label: text for label, _, text, _ in cands}
+    tags = open_vocab.candidate_tags()
     for sense in range(hypernyms.noun_sense_count(kind_noun)):   # the dominant sense any candidate shares
         kinds = [(d, -sim, label, name) for label, sim, text, cat in cands
-                 for hit in [hypernyms.shared_kind(kind_noun, text=text, category=cat, sense=sense)]
+                 for hit in [hypernyms.shared_kind(kind_noun, text=text, category=cat, sense=sense,
+                                                   tags=tags.get(label, ()))]
                  if hit is not None for d, name in [hit]]
         if kinds:
             d, neg_sim, label, name = min(kinds)

@@ -21,8 +21,8 @@ from functools import lru_cache
 from . import embeddings, wordnet
 from .vocabulary import singular
 
-__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "compound_tail", "head_word", "kind_category", "names_other_thing", "noun_sense_count", "ranked_senses", "related",
-           "shared_kind", "visible_senses"]
+__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "MIN_SENSE_SHARE", "compound_tail", "head_word", "kind_category", "names_other_thing", "noun_sense_count", "ranked_senses", "related",
+           "shared_kind", "visible_senses", "weighted_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
 MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
@@ -60,9 +60,28 @@ def ranked_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]:
     if not person or any(s.lexfile != "person" for _, _, s in ranked):
         ranked = [r for r in ranked if r[2].lexfile != "person"]
     top = max((c for c, _, _ in ranked), default=0)
-    near = _gloss_nearness(word, [(i, s) for c, i, s in ranked if c == top])
-    ranked.sort(key=lambda r: (-r[0], -near.get(r[1], 0.0), r[1]))
+    tied = [(i, s) for c, i, s in ranked if c == top]
+    near = _gloss_nearness(word, tied)
+    # the plant a fruit or vegetable grows on is named after it: "a peach" is the fruit, not the tree
+    fruit = any(s.lexfile == "food" for _, s in tied)
+    ranked.sort(key=lambda r: (-r[0], fruit and r[0] == top and r[2].lexfile == "plant", -near.get(r[1], 0.0), r[1]))
     return tuple(s for _, _, s in ranked)
+
+
+# a sense tagged less than this share of the word's most tagged visible sense does not count for it:
+# "tractor" (tagged 3 : 0) is the farm tractor, not a truck's tractor unit; "rock" (the stone) is no candy
+MIN_SENSE_SHARE = 0.5
+
+
+@lru_cache(maxsize=8192)
+def weighted_senses(word: str, person: bool = True) -> tuple[wordnet.Synset, ...]:
+    """`ranked_senses` without the senses WordNet's corpus tags far less often than the dominant one
+    (under `MIN_SENSE_SHARE` of its count; all of them when none was tagged)."""
+    ranked = ranked_senses(word, person)
+    found = wordnet.senses(word)
+    counts = dict(zip((x.offset for x in found), wordnet.sense_counts(word)))
+    top = max((counts.get(x.offset, 0) for x in ranked), default=0)
+    return tuple(x for x in ranked if counts.get(x.offset, 0) >= MIN_SENSE_SHARE * top)
 
 
 def _gloss_nearness(word: str, tied: list[tuple[int, wordnet.Synset]]) -> dict[int, float]:
@@ -79,7 +98,7 @@ def _gloss_nearness(word: str, tied: list[tuple[int, wordnet.Synset]]) -> dict[i
 def _category_senses(category: str) -> frozenset[int]:
     if category == "person":                            # person.n.01 sits at the top of WordNet
         return frozenset(s.offset for s in wordnet.senses(category, 1))
-    senses = ranked_senses(category, person=category in PERSON_CATEGORIES)[:SENSES]
+    senses = weighted_senses(category, person=category in PERSON_CATEGORIES)[:SENSES]
     if any(s.lexfile == "animal" for s in senses):      # "bird" the animal, not its meat
         senses = tuple(s for s in senses if s.lexfile != "food")
     return frozenset(s.offset for s in senses)
@@ -92,8 +111,8 @@ def _closure(offset: int) -> dict[int, int]:
 
 
 def _noun_senses(noun: str) -> tuple[wordnet.Synset, ...]:
-    """The noun's `SENSES` first ranked senses (its singular's when it has none)."""
-    return (ranked_senses(noun) or ranked_senses(singular(noun)))[:SENSES]
+    """The noun's `SENSES` first weighted senses (its singular's when it has none; `weighted_senses`)."""
+    return (weighted_senses(noun) or weighted_senses(singular(noun)))[:SENSES]
 
 
 def kind_category(noun: str, categories: Iterable[str]) -> str | None:
@@ -126,14 +145,21 @@ def names_other_thing(compound: str, category: str) -> bool:
     return wordnet.available() and bool(_noun_senses(compound)) and kind_category(compound, [category]) is None
 
 
-def _text_senses(text: str) -> tuple[wordnet.Synset, ...]:
-    """A candidate name's dominant sense: of the whole name when WordNet knows it, else of its head."""
+@lru_cache(maxsize=8192)
+def _text_senses(text: str, tags: tuple[str, ...] = ()) -> tuple[wordnet.Synset, ...]:
+    """A candidate name's dominant sense: of the whole name when WordNet knows it, else of its head;
+    a sense of the head that one of the candidate's tags names comes first ("Small lavatory" tagged
+    "washbasin" is the washbasin sense of lavatory, not the toilet room)."""
     words = re.findall(r"[a-z]+", text.lower())
     whole = ranked_senses(" ".join(words)) if len(words) > 1 else ()
-    return (whole or ranked_senses(head_word(text)))[:1]
+    if whole:
+        return whole[:1]
+    senses = ranked_senses(head_word(text))
+    named = {"_".join(t.lower().split()) for t in tags}
+    return tuple(x for x in senses if named & set(x.lemmas))[:1] or senses[:1]
 
 
-def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | None:
+def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH, tags: tuple[str, ...] = ()) -> bool | None:
     """Whether a candidate named `text` shows a `noun`: the same sense, the noun a kind of it at most
     `max_depth` steps up and not a broad class (`MAX_HYPONYMS`), or it a kind of the noun ("seat" ->
     "Armchair").
@@ -143,7 +169,7 @@ def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH) -> bool | No
     mine = _noun_senses(noun)
     if not mine:
         return None
-    theirs = _text_senses(text)
+    theirs = _text_senses(text, tuple(tags))
     for n in mine:
         up = _closure(n.offset)
         for t in theirs:
@@ -178,7 +204,7 @@ def noun_sense_count(noun: str) -> int:
 
 
 def shared_kind(noun: str, text: str | None = None, category: str | None = None,
-                sense: int = 0) -> tuple[int, str] | None:
+                sense: int = 0, tags: tuple[str, ...] = ()) -> tuple[int, str] | None:
     """How close a candidate (an asset's name `text`, or a generator `category`) is in kind to the
     noun: (steps from the noun's ranked visible sense number `sense` (0: the dominant one) up to
     the nearest meaningful sense both
@@ -190,7 +216,7 @@ def shared_kind(noun: str, text: str | None = None, category: str | None = None,
     if len(mine) <= sense:
         return None
     up = _closure(mine[sense].offset)
-    theirs = [s.offset for s in (_text_senses(text) if text is not None else ())]
+    theirs = [s.offset for s in (_text_senses(text, tuple(tags)) if text is not None else ())]
     if category is not None:
         theirs += sorted(_category_senses(category))
     best: tuple[int, int] | None = None

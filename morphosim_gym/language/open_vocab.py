@@ -24,7 +24,7 @@ from .hypernyms import head_word
 from .vocabulary import singular
 
 __all__ = ["ASSET_PREFIX", "OPEN_FLOOR", "SHAPES", "OpenMatch", "ground_named", "ground_open", "has_assets",
-           "is_open_category", "name_words", "nearest_candidates", "register_candidates", "shape_for_word"]
+           "candidate_tags", "is_open_category", "name_words", "nearest_candidates", "register_candidates", "shape_for_word"]
 
 ASSET_PREFIX = "asset:"
 OPEN_FLOOR = 0.5          # cosine similarity an open candidate needs (made-up words stay below ~0.45)
@@ -99,6 +99,12 @@ def _all_tagged() -> tuple[list[str], list[str], np.ndarray, list[tuple[str, ...
     return labels, texts, np.concatenate(vecs), tags
 
 
+def candidate_tags() -> dict[str, tuple[str, ...]]:
+    """Candidate label -> the words tagging it (an asset's tags; none for shapes)."""
+    labels, _, _, tags = _all_tagged()
+    return {lab: t for lab, t in zip(labels, tags) if t}
+
+
 def nearest_candidates(phrase: str, k: int = 5) -> list[OpenMatch]:
     """The `k` open candidates closest to "a <phrase>", best first."""
     labels, texts, vecs = _all_candidates()
@@ -158,6 +164,8 @@ def _appositive(noun: str, text: str) -> bool:
     words = re.findall(r"[a-z]+", text.lower())
     if len(words) < 2 or singular(words[-2]) != singular(noun) or "with" in words:
         return False
+    if hypernyms.ranked_senses(" ".join(words[-2:])):
+        return False   # a compound WordNet knows is a kind of its head: "Shower curtain" is a curtain
     mine, theirs = hypernyms.ranked_senses(singular(noun))[:1], hypernyms.ranked_senses(singular(words[-1]))[:1]
     if not mine or not theirs or not mine[0].lexfile == theirs[0].lexfile == "artifact":
         return False   # only made things: "Orange juice", "Tomato sauce", "Peach blossom" are not the noun
