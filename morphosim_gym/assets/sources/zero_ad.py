@@ -51,7 +51,7 @@ FAUNA: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "crocodile": ("Crocodile", "animal", ("reptile", "alligator")),
     "crow": ("Crow", "bird", ("raven",)),
     "deer": ("Deer", "animal", ("stag",)),
-    "donkey": ("Donkey", "animal", ("ass", "mule")),
+    "donkey": ("Donkey", "animal", ("ass",)),       # no "mule": a mule is a hybrid, no kind of donkey
     "dragon": ("Dragon", "animal", ("monster",)),
     "elephant_african_bush": ("African elephant", "elephant", ()),
     "elephant_asian": ("Asian elephant", "elephant", ()),
