@@ -23,6 +23,7 @@ from gymnasium.vector.utils import batch_space, concatenate, create_empty_array,
 
 from morphosim_gym.render.api import PendingRender, render_batch, submit_batch
 from morphosim_gym.render.cpu.claimed import RenderHelpers
+from morphosim_gym.render.cpu.pipeline import Workspace
 
 from . import ENTRY_POINTS
 from .options import ResetOptions
@@ -133,6 +134,7 @@ class MorphoSimVectorEnv(VectorEnv):
         self.scheduler = scheduler
         self._worker: Optional[ThreadPoolExecutor] = None
         self._helpers: Optional[RenderHelpers] = None
+        self._workspaces: list = []              # staging buffers of the "views" scheduler, one per chunk
         self.envs = _make_envs(creator, kwargs, per_env)
         self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
@@ -187,11 +189,11 @@ class MorphoSimVectorEnv(VectorEnv):
         stepped: list = []
         chunks = self._chunks(stepping) or [[]]
         chunks[0] = joining + chunks[0]
-        for chunk in chunks:
+        for c, chunk in enumerate(chunks):
             if not chunk:
                 continue
             requests = self._prepare(chunk, acts, checked, extra)
-            pending.append((chunk, requests, self._launch(requests)))
+            pending.append((chunk, requests, self._launch(requests, c)))
             if len(pending) > 1:
                 self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
         while pending:
@@ -208,20 +210,29 @@ class MorphoSimVectorEnv(VectorEnv):
     def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
                 terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
         """The rest of the step of a chunk's envs once its render is done: a resetting env's
-        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`."""
+        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`.
+        With the "views" scheduler each env is finished as soon as its own views are rendered,
+        while the helpers render the next envs' views."""
         if isinstance(launched, PendingRender):
-            outs = launched.result()
-        elif isinstance(launched, Future):
-            outs = launched.result(timeout=_RENDER_TIMEOUT_S)
-        else:
-            outs = launched
+            k = 0
+            for i, request in zip(chunk, requests):
+                n = len(request[1])
+                rendered = self._rendered([i], [request], launched.partial(k, k + n))[0]
+                k += n
+                self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+            return
+        outs = launched.result(timeout=_RENDER_TIMEOUT_S) if isinstance(launched, Future) else launched
         for i, rendered in zip(chunk, self._rendered(chunk, requests, outs)):
-            if i in checked:
-                self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
-                info.update(extra[i])
-                stepped.append((i, info))
-            else:
-                reset_out[i] = self.envs[i]._reset_end(rendered)
+            self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+
+    def _finish_env(self, i: int, rendered: tuple, checked: dict, extra: dict, rewards: np.ndarray,
+                    terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
+        if i in checked:
+            self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
+            info.update(extra[i])
+            stepped.append((i, info))
+        else:
+            reset_out[i] = self.envs[i]._reset_end(rendered)
 
     def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
         """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
@@ -266,14 +277,16 @@ class MorphoSimVectorEnv(VectorEnv):
                     requests.append(env._render_request(env.world.t))
         return requests
 
-    def _launch(self, requests: list) -> Any:
+    def _launch(self, requests: list, slot: int = 0) -> Any:
         """The batched render of these requests, started: a `PendingRender` (scheduler "views"),
         else a `Future` from the worker thread when pipelined (more than one chunk), else the
         outputs themselves."""
         views = [(sources, cam, bg, sky) for sources, cams, bg, sky in requests for cam in cams]
         if self.scheduler == "views":
+            while len(self._workspaces) <= slot:
+                self._workspaces.append(Workspace())
             return submit_batch(views, helpers=self._render_helpers(), backend=self.backend,
-                                lod=self.envs[0].config.render_lod)
+                                lod=self.envs[0].config.render_lod, workspace=self._workspaces[slot])
         if self._pipeline_chunks() == 1:
             return self._render_views(views)
         if self._worker is None:
@@ -368,6 +381,7 @@ class MorphoSimVectorEnv(VectorEnv):
         state = self.__dict__.copy()
         state["_worker"] = None               # a thread pool does not copy; the copy starts its own
         state["_helpers"] = None
+        state["_workspaces"] = []
         return state
 
     def close_extras(self, **kwargs: Any) -> None:

@@ -212,17 +212,27 @@ class PendingRender:
             self._batch = None
         return self._outs
 
+    def partial(self, lo: int, hi: int) -> list[RenderOutput]:
+        """The outputs of views lo..hi - 1 as soon as they are rendered (this thread renders
+        views nobody has claimed meanwhile), so the caller can use the first views while the
+        helpers render the rest."""
+        if self._outs is not None:
+            return self._outs[lo:hi]
+        return _batch_outputs(self._helpers.partial(self._batch, lo, hi), self._resolved[lo:hi])
+
 
 def submit_batch(views: Sequence[View], t: float = 0.0, *, helpers: Any, backend: str = "cpu",
                  features: bool = False, cull: bool = False, lod: bool = False,
-                 lod_tol: float = 1.0) -> PendingRender:
+                 lod_tol: float = 1.0, workspace: Any = None) -> PendingRender:
     """Start `render_batch(views, t, ...)` on `helpers` (a `cpu.claimed.RenderHelpers`) and return
     at once; `.result()` of the returned `PendingRender` joins in on the calling thread and gives
     the outputs (bit-identical to `render_batch`'s).
 
     On "cpu" with numpy Gaussians the helper threads claim whole views and render them without
     the GIL, so the caller's own Python work runs beside them; other backends (and torch
-    Gaussians) render here, before this returns. Arguments as for `render_batch`.
+    Gaussians) render here, before this returns. `workspace` (a `cpu.pipeline.Workspace`, or
+    None for fresh arrays) holds the staged inputs until `result()` returns: reuse one from
+    batch to batch, one per batch in flight. Other arguments as for `render_batch`.
 
     Examples:
         >>> helpers = RenderHelpers(1)  # doctest: +SKIP
@@ -238,7 +248,7 @@ def submit_batch(views: Sequence[View], t: float = 0.0, *, helpers: Any, backend
                                                lod_tol=lod_tol))
     from .cpu.claimed import ClaimedBatch
 
-    batch = ClaimedBatch(_batch_views(flat), features=features, cull=cull)
+    batch = ClaimedBatch(_batch_views(flat), features=features, cull=cull, workspace=workspace)
     return PendingRender(helpers, helpers.submit(batch), resolved)
 
 

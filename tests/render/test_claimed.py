@@ -73,3 +73,25 @@ def test_outputs_before_every_view_is_rendered_and_bad_helper_counts_are_refused
         with pytest.raises(ValueError, match="helpers"):
             RenderHelpers(bad)
     assert ClaimedBatch([]).work() == 0 and ClaimedBatch([]).outputs() == []
+
+
+@pytest.mark.parametrize("helpers", [0, 1])
+def test_partial_outputs_come_view_range_by_range_and_match(helpers):
+    # the vector env finishes env i as soon as its views are rendered: partial(lo, hi) renders or
+    # waits for exactly those views and gives what the whole batch gives for them
+    views = _views(_SPECS)
+    ref = render_batch(views)
+    pool = RenderHelpers(helpers)
+    try:
+        pending = submit_batch(views, helpers=pool)
+        got = pending.partial(0, 3) + pending.partial(3, 4) + pending.partial(4, len(views))
+    finally:
+        pool.close()
+    for a, b in zip(got, ref):
+        _assert_same(a, b)
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    batch = ClaimedBatch(bvs)
+    assert batch.work(limit=2) == 2 and batch.views_done(0, 2) and not batch.views_done(0, 3)
+    assert len(batch.outputs(0, 2)) == 2
+    with pytest.raises(RuntimeError, match="every view rendered"):
+        batch.outputs(0, 3)

@@ -33,7 +33,7 @@ from ._jit import NREC, jit, pjit
 from .binning import _fill_range, plan_tiles
 from .cull import cull_view
 from .forward import _raster_tiles
-from .pipeline import thread_workspace
+from .pipeline import Workspace, thread_workspace
 from .projection import _project_range
 
 __all__ = ["rasterize_batch_numpy", "BatchView", "batch_view", "Staged", "stage_views", "view_outputs"]
@@ -195,11 +195,19 @@ def _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cul
     return out
 
 
-def _concat(views: Sequence[BatchView], name: str, width: int, dtype) -> np.ndarray:
+def _concat(views: Sequence[BatchView], name: str, width: int, dtype, ws: Optional[Workspace] = None) -> np.ndarray:
+    """One field of every view's parts, concatenated (into `ws`'s buffer of that name when given:
+    a fresh array of megabytes costs page faults on every call)."""
     parts = [x for v in views for x in getattr(v, name)]
     if not parts:
         return np.empty((0, width), dtype) if width else np.empty(0, dtype)
-    return np.ascontiguousarray(parts[0] if len(parts) == 1 else np.concatenate(parts), dtype=dtype)
+    if len(parts) == 1:
+        return np.ascontiguousarray(parts[0], dtype=dtype)
+    if ws is None:
+        return np.ascontiguousarray(np.concatenate(parts), dtype=dtype)
+    n = sum(len(p) for p in parts)
+    out = ws.get("in_" + name, (n, width) if width else (n,), dtype)
+    return np.concatenate(parts, out=out, casting="same_kind")
 
 
 class Staged:
@@ -216,25 +224,27 @@ class Staged:
             setattr(self, k, v)
 
 
-def stage_views(views: Sequence[BatchView], features: bool = False, cull: bool = False) -> Staged:
-    """The `Staged` inputs of a batch (checks the feature dimensions)."""
+def stage_views(views: Sequence[BatchView], features: bool = False, cull: bool = False,
+                ws: Optional[Workspace] = None) -> Staged:
+    """The `Staged` inputs of a batch (checks the feature dimensions); the concatenated Gaussians
+    go into `ws`'s buffers when given (valid until the next batch staged in `ws`)."""
     f32 = np.float32
     V = len(views)
     counts_n = np.array([v.size for v in views], np.int64)
     goff = np.zeros(V + 1, np.int64)
     np.cumsum(counts_n, out=goff[1:])
-    means = _concat(views, "means", 3, f32)
-    quats = _concat(views, "quats", 4, f32)
-    scales = _concat(views, "scales", 3, f32)
-    opac = _concat(views, "opacities", 0, f32)
-    colors = _concat(views, "colors", 3, f32)
-    ids = _concat(views, "ids", 0, np.int32)
+    means = _concat(views, "means", 3, f32, ws)
+    quats = _concat(views, "quats", 4, f32, ws)
+    scales = _concat(views, "scales", 3, f32, ws)
+    opac = _concat(views, "opacities", 0, f32, ws)
+    colors = _concat(views, "colors", 3, f32, ws)
+    ids = _concat(views, "ids", 0, np.int32, ws)
     n = means.shape[0]
     if features:
         dims = {-1 if v.features is None else (v.features[0].shape[1] if v.features else 0) for v in views}
         if len(dims) != 1 or -1 in dims:
             raise ValueError(f"Expected features of one dimension D in every view, found {sorted(dims)}")
-        feat = _concat(views, "features", dims.pop(), f32)
+        feat = _concat(views, "features", dims.pop(), f32, ws)
     else:
         feat = np.empty((n, 0), f32)
     sizes = np.array([(v.width, v.height, (v.width + 15) // 16) for v in views], np.int64).reshape(-1, 3)
@@ -261,11 +271,12 @@ def stage_views(views: Sequence[BatchView], features: bool = False, cull: bool =
                   rstart=rstart, features=bool(features))
 
 
-def view_outputs(s: Staged, rgb, depth, alpha, inst, fout) -> list[dict]:
-    """Per view, its blocks of the flat output buffers as `rasterize_batch_numpy` returns them."""
+def view_outputs(s: Staged, rgb, depth, alpha, inst, fout, lo: int = 0, hi: Optional[int] = None) -> list[dict]:
+    """Per view lo..hi - 1 (default all), its blocks of the flat output buffers as
+    `rasterize_batch_numpy` returns them."""
     D = s.feat.shape[1]
     out = []
-    for v in range(s.V):
+    for v in range(lo, s.V if hi is None else hi):
         w, h = int(s.sizes[v, 0]), int(s.sizes[v, 1])
         p0, p1 = int(s.pix_off[v]), int(s.pix_off[v + 1])
         out.append({"rgb": rgb[3 * p0:3 * p1].reshape(h, w, 3), "depth": depth[p0:p1].reshape(h, w),
@@ -294,14 +305,14 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     if V == 0:
         return []
     nthr = numba.get_num_threads()
-    s = stage_views(views, features, cull)
+    ws = thread_workspace("batch")
+    s = stage_views(views, features, cull, ws)
     means, quats, scales, opac, colors, ids, feat = s.means, s.quats, s.scales, s.opac, s.colors, s.ids, s.feat
     sizes, ntiles, tstart, pix_off = s.sizes, s.ntiles, s.tstart, s.pix_off
     viewmats, Ks, nears, bgs = s.viewmats, s.Ks, s.nears, s.bgs
     n = means.shape[0]
     D = feat.shape[1]
 
-    ws = thread_workspace("batch")
     items, item_start = _work_items(s.goff, nthr, s.kept)
     max_tiles = max(int(ntiles.max()), 1)
     rec = ws.get("rec", (n, NREC), f32)

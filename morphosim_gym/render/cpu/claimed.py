@@ -1,5 +1,5 @@
 """Batched forward rendering shared by Python threads: every thread that calls `ClaimedBatch.work`
-claims whole views of the batch (largest first) and renders each one start to finish (projection,
+claims whole views of the batch (in view order) and renders each one start to finish (projection,
 binning, raster) in one compiled call that holds no GIL.
 
 This is the batch path for callers that have Python work of their own beside the render (the
@@ -17,18 +17,21 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 from typing import Optional, Sequence
 
 import numpy as np
 
 from ._jit import NREC, atomic_add, jit
 from .batch import _MAX_TILE_LIST, BatchView, Staged, stage_views, view_outputs
+from .pipeline import Workspace
 from .binning import _fill_range, plan_tiles
 from .forward import _raster_tiles
 from .projection import _project_range
 
 __all__ = ["ClaimedBatch", "RenderHelpers"]
 
+_POLL_S = 50e-6           # sleep between looks at a helper's view that is still rendering
 _WAIT_S = 600.0            # a helper that takes longer over its last view is hung: raise instead of waiting
 
 
@@ -89,22 +92,24 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
 
 
 @jit
-def _work(state,          # [2] int64: next position in `vorder` to claim, views finished
-          vorder,         # [V] int64 views, largest first
+def _work(state,          # [2] int64: next view to claim, views finished
+          limit,          # most views this call renders (< 0: no limit)
+          vdone,          # [V] int64: 1 once view v is rendered
           longest,        # [V] int64 out: each view's longest tile list
           ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats, Ks, sizes, nears, bgs,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
-    """Claim views one at a time until none is left; returns how many this call rendered."""
-    V = vorder.shape[0]
+    """Claim views one at a time (in view order) until none is left or `limit` are rendered;
+    returns how many this call rendered."""
+    V = vdone.shape[0]
     done = 0
-    while True:
-        q = atomic_add(state, 0, 1)
-        if q >= V:
+    while limit < 0 or done < limit:
+        v = atomic_add(state, 0, 1)
+        if v >= V:
             break
-        v = vorder[q]
         longest[v] = _render_view(v, ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats,
                                   Ks, sizes, nears, bgs, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out,
                                   dummy_f, dummy_i)
+        atomic_add(vdone, v, 1)            # seq_cst: the view's pixels are written before its flag
         atomic_add(state, 1, 1)
         done += 1
     return done
@@ -117,20 +122,25 @@ class ClaimedBatch:
         views: the views (as `batch.rasterize_batch_numpy` takes them).
         features: also render the feature channels (one D in every view).
         cull: drop runs of Gaussians outside a view's frustum first (`cull.cull_view`).
+        workspace: scratch buffers to stage the batch in (reused from batch to batch: fresh
+            megabytes cost page faults on every step); None: fresh arrays. Two batches in
+            flight at once need two workspaces.
 
     Call `work()` from each thread that should render (it returns once no view is left to
     claim; a view another thread claimed may still be rendering), then `outputs()` once every
-    view is finished (`finished`).
+    view is finished (`finished`), or `outputs(lo, hi)` once views lo..hi - 1 are
+    (`views_done`). Views are claimed in view order, so the first ones finish first.
     """
 
-    def __init__(self, views: Sequence[BatchView], features: bool = False, cull: bool = False) -> None:
-        s: Staged = stage_views(views, features, cull)
+    def __init__(self, views: Sequence[BatchView], features: bool = False, cull: bool = False,
+                 workspace: Optional[Workspace] = None) -> None:
+        s: Staged = stage_views(views, features, cull, workspace)
         self._s = s
         V = s.V
         n = s.means.shape[0]
-        # scratch of this batch alone: batches in flight at once must not share it
-        self._rec = np.empty((n, NREC), np.float32)
-        self._trect = np.empty((4, n), np.int32)
+        ws = workspace if workspace is not None else Workspace()
+        self._rec = ws.get("rec", (n, NREC), np.float32)
+        self._trect = ws.get("trect", (4, n), np.int32)
         P = int(s.pix_off[-1])
         D = s.feat.shape[1]
         self._rgb = np.empty(3 * P, np.float32)
@@ -139,9 +149,8 @@ class ClaimedBatch:
         self._inst = np.empty(P, np.int32)
         self._fout = np.empty(D * P, np.float32)
         self._state = np.zeros(2, np.int64)
+        self._vdone = np.zeros(V, np.int64)
         self._longest = np.zeros(V, np.int64)
-        work = (s.counts_n * 4 + s.sizes[:, 0] * s.sizes[:, 1]) if V else np.zeros(0, np.int64)
-        self._vorder = np.argsort(-work, kind="stable").astype(np.int64)     # largest first, ties in view order
         self.error: Optional[BaseException] = None
 
     @property
@@ -153,30 +162,40 @@ class ClaimedBatch:
         """Whether every view has been rendered."""
         return int(self._state[1]) >= self._s.V
 
-    def work(self) -> int:
-        """Render views of this batch until none is left to claim (holds no GIL while rendering);
-        returns how many this call rendered."""
+    @property
+    def claimable(self) -> bool:
+        """Whether a view is left for a `work` call to claim."""
+        return int(self._state[0]) < self._s.V
+
+    def views_done(self, lo: int, hi: int) -> bool:
+        """Whether views lo..hi - 1 have been rendered."""
+        return bool(self._vdone[lo:hi].all())
+
+    def work(self, limit: int = -1) -> int:
+        """Render views of this batch until none is left to claim, or `limit` of them (holds no
+        GIL while rendering); returns how many this call rendered."""
         s = self._s
         if s.V == 0:
             return 0
-        return int(_work(self._state, self._vorder, self._longest, s.ranges, s.rstart, s.means, s.quats, s.scales,
+        return int(_work(self._state, int(limit), self._vdone, self._longest, s.ranges, s.rstart, s.means, s.quats, s.scales,
                          s.opac, s.colors, s.feat, s.ids, s.viewmats, s.Ks, s.sizes, s.nears, s.bgs, s.pix_off,
                          self._rec, self._trect, self._rgb, self._depth, self._alpha, self._inst, self._fout,
                          np.empty((1, 1), np.float32), np.empty((1, 1), np.int32)))
 
-    def outputs(self) -> list[dict]:
-        """One dict per view, as `batch.rasterize_batch_numpy` returns them."""
+    def outputs(self, lo: int = 0, hi: Optional[int] = None) -> list[dict]:
+        """One dict per view lo..hi - 1 (default all), as `batch.rasterize_batch_numpy` returns them."""
         if self.error is not None:
             raise self.error
-        if not self.finished:
-            raise RuntimeError(f"Expected every view rendered before outputs(), found {int(self._state[1])} of "
-                               f"{self._s.V}")
         s = self._s
-        worst = int(self._longest.max()) if s.V else 0
+        hi = s.V if hi is None else hi
+        if not self.views_done(lo, hi):
+            raise RuntimeError(f"Expected every view rendered before outputs(), found {int(self._vdone[lo:hi].sum())} "
+                               f"of {hi - lo}")
+        worst = int(self._longest[lo:hi].max()) if hi > lo else 0
         if worst >= _MAX_TILE_LIST:
             raise ValueError(f"Expected at most {_MAX_TILE_LIST - 1} Gaussians over one 16x16 tile in float32, "
                              f"found {worst} (list positions are kept as floats)")
-        return view_outputs(s, self._rgb, self._depth, self._alpha, self._inst, self._fout)
+        return view_outputs(s, self._rgb, self._depth, self._alpha, self._inst, self._fout, lo, hi)
 
 
 class RenderHelpers:
@@ -218,6 +237,24 @@ class RenderHelpers:
         if done is not None and not done.wait(timeout_s):
             raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them still busy")
         return batch.outputs()
+
+    def partial(self, batch: ClaimedBatch, lo: int, hi: int, timeout_s: float = _WAIT_S) -> list[dict]:
+        """The outputs of views lo..hi - 1 once they are rendered: until then this thread renders
+        views no helper has claimed, one at a time, or waits for the helpers' (so a caller can
+        finish the work of the first views while the helpers render the last)."""
+        deadline = None
+        while not batch.views_done(lo, hi):
+            if batch.error is not None:
+                raise batch.error
+            if batch.claimable:
+                batch.work(1)
+                continue
+            now = time.monotonic()
+            deadline = deadline or now + timeout_s
+            if now > deadline:
+                raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
+            time.sleep(_POLL_S)                  # releases the GIL; a helper's view takes ~0.1-2 ms
+        return batch.outputs(lo, hi)
 
     def close(self) -> None:
         """Stop the helper threads (a later `submit` starts new ones)."""
