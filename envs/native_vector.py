@@ -257,7 +257,7 @@ class MorphoSimVectorEnv(VectorEnv):
         return [indices[bounds[j]:bounds[j + 1]] for j in range(k) if bounds[j + 1] > bounds[j]]
 
     def _pipeline_chunks(self) -> int:
-        return 1 if self.pipeline is None else self.pipeline   # None: serial, faster on 2 cores (see __init__)
+        return 1 if self.pipeline is None else self.pipeline   # None: one chunk (see __init__)
 
     def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
         """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
