@@ -212,13 +212,13 @@ class PendingRender:
             self._batch = None
         return self._outs
 
-    def partial(self, lo: int, hi: int) -> list[RenderOutput]:
+    def partial(self, lo: int, hi: int, timeout_s: float = 600.0) -> list[RenderOutput]:
         """The outputs of views lo..hi - 1 as soon as they are rendered (this thread renders
         views nobody has claimed meanwhile), so the caller can use the first views while the
-        helpers render the rest."""
+        helpers render the rest (`TimeoutError` after `timeout_s` seconds of waiting)."""
         if self._outs is not None:
             return self._outs[lo:hi]
-        return _batch_outputs(self._helpers.partial(self._batch, lo, hi), self._resolved[lo:hi])
+        return _batch_outputs(self._helpers.partial(self._batch, lo, hi, timeout_s), self._resolved[lo:hi])
 
 
 def submit_batch(views: Sequence[View], t: float = 0.0, *, helpers: Any, backend: str = "cpu",

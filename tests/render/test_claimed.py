@@ -84,7 +84,7 @@ def test_partial_outputs_come_view_range_by_range_and_match(helpers):
     pool = RenderHelpers(helpers)
     try:
         pending = submit_batch(views, helpers=pool)
-        got = pending.partial(0, 3) + pending.partial(3, 4) + pending.partial(4, len(views))
+        got = pending.partial(0, 3, 30) + pending.partial(3, 4, 30) + pending.partial(4, len(views), 30)
     finally:
         pool.close()
     for a, b in zip(got, ref):
