@@ -18,11 +18,15 @@ assets and an HDR sky where the asset packages are installed). Modes:
   sync-8           SyncVectorEnv of 8 envs in one process
   async-8          AsyncVectorEnv of 8 envs, one process each (spawn)
   vector-8         the native MorphoSimVectorEnv of 8 envs: one process, one batched render of
-                   all 8 cameras per step on all cores
-  vector-8-1thread the same with its batched render on one numba thread
-  vector-8-pipelined the same with the render pipeline (`pipeline=2`: a worker thread renders
-                   one half of the envs while the other half is prepared or finished; vector-8
-                   is serial, the default since 2026-12-02)
+                   all 8 cameras per step on all cores (the default scheduler "views": this
+                   thread and a helper thread claim whole views, each rendered in one GIL-free
+                   call; this thread finishes env i as soon as its view is done)
+  vector-8-1thread the same with its batched render on one thread (no helper)
+  vector-8-pipelined the same in two chunks (`pipeline=2`: the helper starts on the first half
+                   while this thread prepares the second)
+  vector-8-numba   the same with scheduler="numba" (one numba parallel region per stage over all
+                   views: the default before 2026-12-02)
+  vector-8-numba-pipelined  scheduler="numba", pipeline=2 (a worker thread renders each half)
   vector-32        the same with 32 envs
 
 The table's "x single" column is each mode's median over the single env's median of the same id
@@ -30,7 +34,7 @@ and scene kind, from this run (the issue-#23 check: `--modes single sync-8 vecto
 
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
 observation) by calling them directly. `--ratios` measures single, vector-8, sync-8,
-vector-8-1thread, vector-8-pipelined and vector-32 alternately in one run (A B C A B C ...) and
+vector-8-1thread, vector-8-pipelined, vector-8-numba and vector-32 alternately in one run (A B C A B C ...) and
 reports per-round ratios (median) and the vector-8 cost split (batched render, skinning, the
 rest: Python; measured serially) for each id and scene kind; on a shared machine only these
 same-run ratios mean much.
@@ -57,7 +61,7 @@ from morphosim_gym.envs import ENV_IDS, make_vec  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 MODES = ("single", "single-2threads", "single-fresh", "sync-8", "async-8", "vector-8", "vector-8-1thread",
-         "vector-8-pipelined", "vector-32")
+         "vector-8-pipelined", "vector-8-numba", "vector-8-numba-pipelined", "vector-32")
 
 
 def _single(env_id: str, steps: int, **kw) -> float:
@@ -84,6 +88,8 @@ _MODE_TABLE = {
     "vector-8": ("vector", 8, {"scene_pool": 8}),
     "vector-8-1thread": ("vector", 8, {"scene_pool": 8, "render_threads": 1}),
     "vector-8-pipelined": ("vector", 8, {"scene_pool": 8, "pipeline": 2}),
+    "vector-8-numba": ("vector", 8, {"scene_pool": 8, "scheduler": "numba"}),
+    "vector-8-numba-pipelined": ("vector", 8, {"scene_pool": 8, "scheduler": "numba", "pipeline": 2}),
     "vector-32": ("vector", 32, {"scene_pool": 8}),
 }
 
@@ -101,10 +107,11 @@ def measure(env_id: str, mode: str, steps: int, scenes: str = "procedural") -> f
 
 def vector_split(env_id: str, steps: int, n: int = 8, render_threads=None, scenes: str = "procedural") -> dict:
     """Per env-step microseconds of a native vector env of n envs: batched render, skinning, rest
-    (measured without the pipeline, so the parts add up to the total)."""
+    (measured with scheduler="numba" and no pipeline, where the render is a phase of its own and
+    the parts add up to the total; the default "views" scheduler overlaps them)."""
     timer = render_and_skinning_timer()
     venv = make_vec(env_id, n, vectorization_mode="vector", scene_pool=8, render_threads=render_threads,
-                    pipeline=1, **scene_kwargs(scenes))      # serial: the render does not overlap the rest
+                    pipeline=1, scheduler="numba", **scene_kwargs(scenes))   # the render does not overlap the rest
     try:
         total = vector_rollout(venv, steps, on_start=timer.install)
     finally:
@@ -143,11 +150,13 @@ def ratios(env_id: str, steps: int, rounds: int, scenes: str = "procedural") -> 
     return out
 
 
-RATIO_MODES = ("single", "vector-8", "sync-8", "vector-8-1thread", "vector-8-pipelined", "vector-32")
+RATIO_MODES = ("single", "vector-8", "sync-8", "vector-8-1thread", "vector-8-pipelined", "vector-8-numba", "vector-32")
 _RATIOS = {"vector8_over_single": ("vector-8", "single"), "vector8_over_sync8": ("vector-8", "sync-8"),
            "vector8_1thread_over_single": ("vector-8-1thread", "single"),
            "vector8_1thread_over_sync8": ("vector-8-1thread", "sync-8"),
            "vector8_pipelined_over_vector8": ("vector-8-pipelined", "vector-8"),
+           "vector8_over_vector8_numba": ("vector-8", "vector-8-numba"),
+           "vector8_numba_over_single": ("vector-8-numba", "single"),
            "vector32_over_single": ("vector-32", "single")}
 
 
@@ -252,7 +261,8 @@ def _main_ratios(args) -> None:
             out.append(r)
             print(f"{env_id:22s} {scenes:10s} vector-8/single {r['vector8_over_single']:.2f}  vector-8/sync-8 "
                   f"{r['vector8_over_sync8']:.2f}  vector-8-pipelined/vector-8 {r['vector8_pipelined_over_vector8']:.2f}  "
-                  f"vector-32/single {r['vector32_over_single']:.2f}  "
+                  f"vector-32/single {r['vector32_over_single']:.2f}  vector-8/vector-8-numba "
+                  f"{r['vector8_over_vector8_numba']:.2f} (numba/single {r['vector8_numba_over_single']:.2f})  "
                   f"(1 thread: {r['vector8_1thread_over_single']:.2f}, {r['vector8_1thread_over_sync8']:.2f})  "
                   f"runs {r['runs']}  split {r['vector8_split_us_per_env_step']}"
                   f"  split 1 thread {r['vector8_1thread_split_us_per_env_step']}", flush=True)

@@ -21,7 +21,9 @@ from gymnasium.envs.registration import load_env_creator
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from morphosim_gym.render.api import render_batch
+from morphosim_gym.render.api import PendingRender, render_batch, submit_batch
+from morphosim_gym.render.cpu.claimed import RenderHelpers
+from morphosim_gym.render.cpu.pipeline import Workspace
 
 from . import ENTRY_POINTS
 from .options import ResetOptions
@@ -32,6 +34,7 @@ from .wrappers import LanguagePerturbation
 __all__ = ["MorphoSimVectorEnv", "vector_entry_point"]
 
 _RENDER_TIMEOUT_S = 600.0          # a batched render that takes longer is a hang: raise instead of waiting
+SCHEDULERS = ("views", "numba")
 
 
 class _Deferred(gym.Env):
@@ -64,8 +67,16 @@ class MorphoSimVectorEnv(VectorEnv):
     Args:
         num_envs: how many envs.
         kind: the task kind ("track", "reach", "find"); the registered ids set it.
-        render_threads: numba threads of the batched render (None: all of numba's threads).
-            Each env's own work (skinning, resets) keeps the env's `render_threads` (default 1).
+        render_threads: threads of the batched render (None: numba's thread count,
+            `NUMBA_NUM_THREADS`, all cores by default). Each env's own work (skinning, resets)
+            keeps the env's `render_threads` (default 1).
+        scheduler: how those threads share a step's render. "views" (default): this thread and
+            `render_threads - 1` helper threads claim whole views (largest first) and render each
+            one start to finish in one compiled call without the GIL; the helpers start as soon
+            as a chunk's views are ready, while this thread prepares the next chunk or finishes
+            the previous one, and this thread joins in when its Python work is done. "numba":
+            one numba parallel region per stage (projection, binning, raster) over all views,
+            as before 2026-12-02 (the helper thread of `pipeline` > 1 renders the whole chunk).
         backend: the batched render's backend ("cpu", or "gsplat" on a CUDA machine); None: the
             first env's `render_backend` (its sim's `config.render_backend`, "cpu" by default).
         perturbations: one `LanguagePerturbation` keyword dict (schedule, edits, probability,
@@ -73,14 +84,14 @@ class MorphoSimVectorEnv(VectorEnv):
             `LanguagePerturbation`, exactly as `LanguagePerturbation(gym.make(id), **p)` would be,
             and its info carries "perturbations".
         env_kwargs: one dict of extra env arguments per env (over `kwargs`), or None.
-        pipeline: how many chunks a step's envs are rendered in. With more than one, a worker
-            thread renders chunk c while this thread finishes chunk c - 1 (reward, observation,
-            info) and prepares chunk c + 1 (rig, skinning, cameras), so the Python work and the
-            render run on different cores. None: 1 (no worker): on 2 quiet cores the serial
-            batch was faster (Track vector-8 1,506 vs 1,264 steps/s with 2 chunks,
-            `benchmarks/results/envs_quiet_2026-12-02b.json`); more cores may favour 2 (ask for it
-            only with a thread-safe numba layer, tbb or omp). Results are the same either way (every view's
-            image is independent of the batch it is rendered in).
+        pipeline: how many chunks a step's envs are rendered in. With more than one, chunk c
+            renders while this thread prepares chunk c + 1 (rig, skinning, cameras) and finishes
+            chunk c - 1 (reward, observation, info). None: 1 (resets join the step's render).
+            With the "numba" scheduler one worker thread renders each chunk alone (ask for it
+            only with a thread-safe numba layer, tbb or omp); on 2 quiet cores that was slower
+            than the serial batch (Track vector-8 1,264 vs 1,506 steps/s,
+            `benchmarks/results/envs_quiet_2026-12-02b.json`). Results are the same either way
+            (every view's image is independent of the batch and the thread it is rendered in).
         kwargs: env arguments (the fields of `EnvConfig`) for every env.
 
     Gymnasium's `autoreset_mode` is NEXT_STEP (as `SyncVectorEnv`'s default): the step after an
@@ -100,7 +111,7 @@ class MorphoSimVectorEnv(VectorEnv):
     def __init__(self, num_envs: int, kind: str = "track", render_threads: Optional[int] = None,
                  backend: Optional[str] = None, perturbations: Optional[Sequence[Optional[Mapping[str, Any]]]] = None,
                  env_kwargs: Optional[Sequence[Optional[Mapping[str, Any]]]] = None, pipeline: Optional[int] = None,
-                 **kwargs: Any) -> None:
+                 scheduler: str = "views", **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"Expected num_envs as a positive integer, found {num_envs!r}")
         if kind not in ENTRY_POINTS:
@@ -108,6 +119,11 @@ class MorphoSimVectorEnv(VectorEnv):
         if pipeline is not None and (isinstance(pipeline, bool) or not isinstance(pipeline, (int, np.integer))
                                      or pipeline < 1):
             raise ValueError(f"Expected pipeline as a positive integer or None, found {pipeline!r}")
+        if scheduler not in SCHEDULERS:
+            raise ValueError(f"Expected scheduler in {SCHEDULERS}, found {scheduler!r}")
+        if render_threads is not None and (isinstance(render_threads, bool) or not isinstance(
+                render_threads, (int, np.integer)) or render_threads < 1):
+            raise ValueError(f"Expected render_threads as a positive integer or None, found {render_threads!r}")
         n = int(num_envs)
         per_env = _per_env(env_kwargs, n, "env_kwargs")
         perturbations = _per_env(perturbations, n, "perturbations")
@@ -115,7 +131,10 @@ class MorphoSimVectorEnv(VectorEnv):
         self.num_envs = n
         self.render_threads = render_threads
         self.pipeline = None if pipeline is None else int(pipeline)
+        self.scheduler = scheduler
         self._worker: Optional[ThreadPoolExecutor] = None
+        self._helpers: Optional[RenderHelpers] = None
+        self._workspaces: list = []              # staging buffers of the "views" scheduler, one per chunk
         self.envs = _make_envs(creator, kwargs, per_env)
         self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
@@ -170,11 +189,11 @@ class MorphoSimVectorEnv(VectorEnv):
         stepped: list = []
         chunks = self._chunks(stepping) or [[]]
         chunks[0] = joining + chunks[0]
-        for chunk in chunks:
+        for c, chunk in enumerate(chunks):
             if not chunk:
                 continue
             requests = self._prepare(chunk, acts, checked, extra)
-            pending.append((chunk, requests, self._launch(requests)))
+            pending.append((chunk, requests, self._launch(requests, c)))
             if len(pending) > 1:
                 self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
         while pending:
@@ -191,15 +210,29 @@ class MorphoSimVectorEnv(VectorEnv):
     def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
                 terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
         """The rest of the step of a chunk's envs once its render is done: a resetting env's
-        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`."""
+        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`.
+        With the "views" scheduler each env is finished as soon as its own views are rendered,
+        while the helpers render the next envs' views."""
+        if isinstance(launched, PendingRender):
+            k = 0
+            for i, request in zip(chunk, requests):
+                n = len(request[1])
+                rendered = self._rendered([i], [request], launched.partial(k, k + n))[0]
+                k += n
+                self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+            return
         outs = launched.result(timeout=_RENDER_TIMEOUT_S) if isinstance(launched, Future) else launched
         for i, rendered in zip(chunk, self._rendered(chunk, requests, outs)):
-            if i in checked:
-                self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
-                info.update(extra[i])
-                stepped.append((i, info))
-            else:
-                reset_out[i] = self.envs[i]._reset_end(rendered)
+            self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+
+    def _finish_env(self, i: int, rendered: tuple, checked: dict, extra: dict, rewards: np.ndarray,
+                    terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
+        if i in checked:
+            self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
+            info.update(extra[i])
+            stepped.append((i, info))
+        else:
+            reset_out[i] = self.envs[i]._reset_end(rendered)
 
     def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
         """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
@@ -224,7 +257,7 @@ class MorphoSimVectorEnv(VectorEnv):
         return [indices[bounds[j]:bounds[j + 1]] for j in range(k) if bounds[j + 1] > bounds[j]]
 
     def _pipeline_chunks(self) -> int:
-        return 1 if self.pipeline is None else self.pipeline   # None: serial, faster on 2 cores (see __init__)
+        return 1 if self.pipeline is None else self.pipeline   # None: one chunk (see __init__)
 
     def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
         """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
@@ -244,15 +277,30 @@ class MorphoSimVectorEnv(VectorEnv):
                     requests.append(env._render_request(env.world.t))
         return requests
 
-    def _launch(self, requests: list) -> Any:
-        """The batched render of these requests: a `Future` from the worker thread when pipelined
-        (more than one chunk), else the outputs themselves."""
+    def _launch(self, requests: list, slot: int = 0) -> Any:
+        """The batched render of these requests, started: a `PendingRender` (scheduler "views"),
+        else a `Future` from the worker thread when pipelined (more than one chunk), else the
+        outputs themselves."""
         views = [(sources, cam, bg, sky) for sources, cams, bg, sky in requests for cam in cams]
+        if self.scheduler == "views":
+            while len(self._workspaces) <= slot:
+                self._workspaces.append(Workspace())
+            return submit_batch(views, helpers=self._render_helpers(), backend=self.backend,
+                                lod=self.envs[0].config.render_lod, workspace=self._workspaces[slot])
         if self._pipeline_chunks() == 1:
             return self._render_views(views)
         if self._worker is None:
             self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="morphosim-vector-render")
         return self._worker.submit(self._render_views, views)
+
+    def _render_helpers(self) -> RenderHelpers:
+        """The helper threads of the "views" scheduler (`render_threads - 1` of them)."""
+        if self._helpers is None:
+            import numba
+
+            threads = self.render_threads if self.render_threads is not None else numba.config.NUMBA_NUM_THREADS
+            self._helpers = RenderHelpers(max(0, int(threads) - 1))
+        return self._helpers
 
     def _render_views(self, views: list) -> list:
         with numba_threads(self.render_threads):
@@ -332,12 +380,17 @@ class MorphoSimVectorEnv(VectorEnv):
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_worker"] = None               # a thread pool does not copy; the copy starts its own
+        state["_helpers"] = None
+        state["_workspaces"] = []
         return state
 
     def close_extras(self, **kwargs: Any) -> None:
         if self._worker is not None:
             self._worker.shutdown(wait=True)
             self._worker = None
+        if self._helpers is not None:
+            self._helpers.close()
+            self._helpers = None
         for env in self.envs:
             env.close()
 

@@ -20,7 +20,7 @@ from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
 from ..scene.sky import check_sky
 
-__all__ = ["RenderOutput", "render", "render_batch", "rasterize", "BACKENDS", "cameras_to_arrays"]
+__all__ = ["RenderOutput", "render", "render_batch", "submit_batch", "PendingRender", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
 BACKENDS = ("cpu", "torch", "gsplat")
 _OUTPUT_KEYS = ("rgb", "depth", "alpha", "instance", "features")
@@ -182,6 +182,80 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
         >>> outs[1].rgb.shape  # doctest: +SKIP
         (84, 84, 3)
     """
+    staged = _stage_batch(views, t, backend, features, lod, lod_tol)
+    if isinstance(staged, list):
+        return staged
+    resolved, flat = staged
+    if backend == "gsplat":
+        from .gsplat_backend import render_batch_gsplat
+
+        outs = render_batch_gsplat(flat, features=features)
+    else:
+        from .cpu.batch import rasterize_batch_numpy
+
+        outs = rasterize_batch_numpy(_batch_views(flat), features=features, cull=cull)
+    return _batch_outputs(outs, resolved)
+
+
+class PendingRender:
+    """A batched render under way (`submit_batch`): `result()` gives `render_batch`'s list."""
+
+    def __init__(self, helpers: Any = None, batch: Any = None, resolved: Optional[list] = None,
+                 outs: Optional[list] = None) -> None:
+        self._helpers, self._batch, self._resolved, self._outs = helpers, batch, resolved, outs
+
+    def result(self) -> list[RenderOutput]:
+        """Render what the helpers have not claimed on this thread, wait for the rest, and return
+        one `RenderOutput` per view (as `render_batch`)."""
+        if self._outs is None:
+            self._outs = _batch_outputs(self._helpers.complete(self._batch), self._resolved)
+            self._batch = None
+        return self._outs
+
+    def partial(self, lo: int, hi: int, timeout_s: float = 600.0) -> list[RenderOutput]:
+        """The outputs of views lo..hi - 1 as soon as they are rendered (this thread renders
+        views nobody has claimed meanwhile), so the caller can use the first views while the
+        helpers render the rest (`TimeoutError` after `timeout_s` seconds of waiting)."""
+        if self._outs is not None:
+            return self._outs[lo:hi]
+        return _batch_outputs(self._helpers.partial(self._batch, lo, hi, timeout_s), self._resolved[lo:hi])
+
+
+def submit_batch(views: Sequence[View], t: float = 0.0, *, helpers: Any, backend: str = "cpu",
+                 features: bool = False, cull: bool = False, lod: bool = False,
+                 lod_tol: float = 1.0, workspace: Any = None) -> PendingRender:
+    """Start `render_batch(views, t, ...)` on `helpers` (a `cpu.claimed.RenderHelpers`) and return
+    at once; `.result()` of the returned `PendingRender` joins in on the calling thread and gives
+    the outputs (bit-identical to `render_batch`'s).
+
+    On "cpu" with numpy Gaussians the helper threads claim whole views and render them without
+    the GIL, so the caller's own Python work runs beside them; other backends (and torch
+    Gaussians) render here, before this returns. `workspace` (a `cpu.pipeline.Workspace`, or
+    None for fresh arrays) holds the staged inputs until `result()` returns: reuse one from
+    batch to batch, one per batch in flight. Other arguments as for `render_batch`.
+
+    Examples:
+        >>> helpers = RenderHelpers(1)  # doctest: +SKIP
+        >>> pending = submit_batch([(g_a, cam_a), (g_b, cam_b)], helpers=helpers)  # doctest: +SKIP
+        >>> outs = pending.result()  # doctest: +SKIP
+    """
+    staged = _stage_batch(views, t, backend, features, lod, lod_tol)
+    if isinstance(staged, list):
+        return PendingRender(outs=staged)
+    resolved, flat = staged
+    if backend == "gsplat":
+        return PendingRender(outs=render_batch(views, t, backend=backend, features=features, cull=cull, lod=lod,
+                                               lod_tol=lod_tol))
+    from .cpu.claimed import ClaimedBatch
+
+    batch = ClaimedBatch(_batch_views(flat), features=features, cull=cull, workspace=workspace)
+    return PendingRender(helpers, helpers.submit(batch), resolved)
+
+
+def _stage_batch(views: Sequence[View], t: float, backend: str, features: bool, lod: bool,
+                 lod_tol: float) -> Any:
+    """`render_batch`'s checks; the finished outputs where the torch path renders view by view,
+    else (resolved views, flat (parts, camera, background) views with level of detail applied)."""
     if backend not in BACKENDS:
         raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
     resolved = [_resolve_view(i, view, t) for i, view in enumerate(views)]
@@ -194,20 +268,21 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
     if backend == "torch" or any(p.is_torch for parts, _, _, _ in resolved for p in parts):
         return [render(parts, cam, backend=backend, background=bg, features=features) for parts, cam, bg, _ in resolved]
     flat = [(parts, cam, np.zeros(3) if sky is not None else bg) for parts, cam, bg, sky in resolved]
-    if backend == "gsplat":
-        from .gsplat_backend import render_batch_gsplat
+    if lod and backend == "cpu":
+        from .lod import lod_parts
 
-        outs = render_batch_gsplat(flat, features=features)
-    else:
-        from .cpu.batch import batch_view, rasterize_batch_numpy
+        flat = [(lod_parts(parts, cam.world_to_camera, cam.K, cam.near, lod_tol), cam, bg) for parts, cam, bg in flat]
+    return resolved, flat
 
-        if lod:
-            from .lod import lod_parts
 
-            flat = [(lod_parts(parts, cam.world_to_camera, cam.K, cam.near, lod_tol), cam, bg)
-                    for parts, cam, bg in flat]
-        outs = rasterize_batch_numpy([batch_view(parts, cam.world_to_camera, cam.K, cam.near, cam.width, cam.height,
-                                                 bg) for parts, cam, bg in flat], features=features, cull=cull)
+def _batch_views(flat: list) -> list:
+    from .cpu.batch import batch_view
+
+    return [batch_view(parts, cam.world_to_camera, cam.K, cam.near, cam.width, cam.height, bg)
+            for parts, cam, bg in flat]
+
+
+def _batch_outputs(outs: list, resolved: list) -> list[RenderOutput]:
     for o, (_, cam, _, sky) in zip(outs, resolved):
         if sky is not None:          # as `render` does: the sky behind what the Gaussians leave uncovered
             o["rgb"] = _composite_sky(o["rgb"][None], o["alpha"][None], sky, [cam])[0]

@@ -172,17 +172,32 @@ def test_registered_task_ids_get_the_native_vector_env():
     venv.close()
 
 
-@pytest.mark.parametrize("pipeline", [1, 3])
-def test_pipelined_chunks_match_single_envs(pipeline):
-    # pipeline=3 over 2 envs: one env per chunk (a worker thread renders one while the other is
-    # prepared or finished); pipeline=1: no worker thread
+@pytest.mark.parametrize("scheduler,pipeline,threads", [("numba", 1, None), ("numba", 3, None), ("views", 1, 2),
+                                                      ("views", 3, 2), ("views", 2, 1)])
+def test_pipelined_chunks_match_single_envs(scheduler, pipeline, threads):
+    # pipeline=3 over 2 envs: one env per chunk (chunk c renders while the other is prepared or
+    # finished); "numba": a worker thread renders a chunk when pipeline > 1; "views": helper
+    # threads (render_threads - 1 of them) claim whole views beside this thread
     kw = dict(FAST, scene_pool=2)
-    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=pipeline, **kw)
+    venv = make_vec("MorphoSim/Track-v0", N, vectorization_mode="vector", pipeline=pipeline, scheduler=scheduler,
+                    render_threads=threads, **kw)
     singles = [make("MorphoSim/Track-v0", **kw) for _ in range(N)]
     assert _rollout_compare(venv, singles, seed=11) >= N
-    assert (venv._worker is not None) == (pipeline > 1)
+    assert (venv._worker is not None) == (scheduler == "numba" and pipeline > 1)
+    assert (venv._helpers is not None) == (scheduler == "views")
+    if scheduler == "views":
+        assert venv._helpers.helpers == threads - 1
     venv.close()
-    assert venv._worker is None
+    assert venv._worker is None and venv._helpers is None
+
+
+def test_scheduler_and_render_threads_are_checked():
+    for bad in ("tiles", None, 1):
+        with pytest.raises(ValueError, match="scheduler"):
+            MorphoSimVectorEnv(1, scheduler=bad)
+    for bad in (0, -2, 1.5, True):
+        with pytest.raises(ValueError, match="render_threads"):
+            MorphoSimVectorEnv(1, render_threads=bad)
 
 
 def test_pipeline_argument_is_checked():
@@ -199,7 +214,7 @@ def test_a_pipelined_vector_env_deep_copies_and_both_copies_step_alike():
     a = np.full((N, 3), 0.2, np.float32)
     venv.step(a)
     twin = copy.deepcopy(venv)
-    assert twin._worker is None
+    assert twin._worker is None and twin._helpers is None
     obs, rew, _, _, _ = venv.step(a)
     obs2, rew2, _, _, _ = twin.step(a)
     assert np.array_equal(obs["rgb"], obs2["rgb"]) and np.array_equal(rew, rew2)

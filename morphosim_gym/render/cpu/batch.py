@@ -33,10 +33,10 @@ from ._jit import NREC, jit, pjit
 from .binning import _fill_range, plan_tiles
 from .cull import cull_view
 from .forward import _raster_tiles
-from .pipeline import thread_workspace
+from .pipeline import Workspace, thread_workspace
 from .projection import _project_range
 
-__all__ = ["rasterize_batch_numpy", "BatchView", "batch_view"]
+__all__ = ["rasterize_batch_numpy", "BatchView", "batch_view", "Staged", "stage_views", "view_outputs"]
 
 _KEY_DTYPE = np.uint32
 _MAX_TILE_LIST = 1 << 24
@@ -195,11 +195,94 @@ def _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cul
     return out
 
 
-def _concat(views: Sequence[BatchView], name: str, width: int, dtype) -> np.ndarray:
+def _concat(views: Sequence[BatchView], name: str, width: int, dtype, ws: Optional[Workspace] = None) -> np.ndarray:
+    """One field of every view's parts, concatenated (into `ws`'s buffer of that name when given:
+    a fresh array of megabytes costs page faults on every call)."""
     parts = [x for v in views for x in getattr(v, name)]
     if not parts:
         return np.empty((0, width), dtype) if width else np.empty(0, dtype)
-    return np.ascontiguousarray(parts[0] if len(parts) == 1 else np.concatenate(parts), dtype=dtype)
+    if len(parts) == 1:
+        return np.ascontiguousarray(parts[0], dtype=dtype)
+    if ws is None:
+        return np.ascontiguousarray(np.concatenate(parts), dtype=dtype)
+    n = sum(len(p) for p in parts)
+    out = ws.get("in_" + name, (n, width) if width else (n,), dtype)
+    return np.concatenate(parts, out=out, casting="same_kind")
+
+
+class Staged:
+    """A batch's inputs as the kernels take them (`stage_views`): all views' Gaussians
+    concatenated (view v owns goff[v]:goff[v + 1]), per-view cameras, sizes, backgrounds, pixel
+    offsets, and the index ranges left after culling (view v's are ranges[rstart[v]:rstart[v + 1]])."""
+
+    __slots__ = ("V", "counts_n", "goff", "means", "quats", "scales", "opac", "colors", "ids", "feat", "sizes",
+                 "ntiles", "tstart", "pix_off", "viewmats", "Ks", "nears", "bgs", "kept", "ranges", "rstart",
+                 "features")
+
+    def __init__(self, **fields) -> None:
+        for k, v in fields.items():
+            setattr(self, k, v)
+
+
+def stage_views(views: Sequence[BatchView], features: bool = False, cull: bool = False,
+                ws: Optional[Workspace] = None) -> Staged:
+    """The `Staged` inputs of a batch (checks the feature dimensions); the concatenated Gaussians
+    go into `ws`'s buffers when given (valid until the next batch staged in `ws`)."""
+    f32 = np.float32
+    V = len(views)
+    counts_n = np.array([v.size for v in views], np.int64)
+    goff = np.zeros(V + 1, np.int64)
+    np.cumsum(counts_n, out=goff[1:])
+    means = _concat(views, "means", 3, f32, ws)
+    quats = _concat(views, "quats", 4, f32, ws)
+    scales = _concat(views, "scales", 3, f32, ws)
+    opac = _concat(views, "opacities", 0, f32, ws)
+    colors = _concat(views, "colors", 3, f32, ws)
+    ids = _concat(views, "ids", 0, np.int32, ws)
+    n = means.shape[0]
+    if features:
+        dims = {-1 if v.features is None else (v.features[0].shape[1] if v.features else 0) for v in views}
+        if len(dims) != 1 or -1 in dims:
+            raise ValueError(f"Expected features of one dimension D in every view, found {sorted(dims)}")
+        feat = _concat(views, "features", dims.pop(), f32, ws)
+    else:
+        feat = np.empty((n, 0), f32)
+    sizes = np.array([(v.width, v.height, (v.width + 15) // 16) for v in views], np.int64).reshape(-1, 3)
+    ntiles = sizes[:, 2] * ((sizes[:, 1] + 15) // 16)
+    tstart = np.zeros(V + 1, np.int64)
+    np.cumsum(ntiles + 1, out=tstart[1:])
+    npx = sizes[:, 0] * sizes[:, 1]
+    pix_off = np.zeros(V + 1, np.int64)
+    np.cumsum(npx, out=pix_off[1:])
+    if V:
+        viewmats = np.ascontiguousarray(np.stack([v.viewmat for v in views]), f32)
+        Ks = np.ascontiguousarray(np.stack([v.K for v in views]), f32)
+        bgs = np.ascontiguousarray(np.stack([v.background for v in views]), f32)
+    else:
+        viewmats, Ks, bgs = np.empty((0, 4, 4), f32), np.empty((0, 3, 3), f32), np.empty((0, 3), f32)
+    nears = np.array([v.near for v in views], f32)
+    kept = _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cull)
+    rstart = np.zeros(V + 1, np.int64)
+    np.cumsum([len(r) for r in kept], out=rstart[1:])
+    ranges = np.ascontiguousarray(np.concatenate(kept) if kept else np.empty((0, 2), np.int64), np.int64)
+    return Staged(V=V, counts_n=counts_n, goff=goff, means=means, quats=quats, scales=scales, opac=opac,
+                  colors=colors, ids=ids, feat=feat, sizes=sizes, ntiles=ntiles, tstart=tstart, pix_off=pix_off,
+                  viewmats=viewmats, Ks=Ks, nears=nears, bgs=bgs, kept=kept, ranges=ranges.reshape(-1, 2),
+                  rstart=rstart, features=bool(features))
+
+
+def view_outputs(s: Staged, rgb, depth, alpha, inst, fout, lo: int = 0, hi: Optional[int] = None) -> list[dict]:
+    """Per view lo..hi - 1 (default all), its blocks of the flat output buffers as
+    `rasterize_batch_numpy` returns them."""
+    D = s.feat.shape[1]
+    out = []
+    for v in range(lo, s.V if hi is None else hi):
+        w, h = int(s.sizes[v, 0]), int(s.sizes[v, 1])
+        p0, p1 = int(s.pix_off[v]), int(s.pix_off[v + 1])
+        out.append({"rgb": rgb[3 * p0:3 * p1].reshape(h, w, 3), "depth": depth[p0:p1].reshape(h, w),
+                    "alpha": alpha[p0:p1].reshape(h, w), "instance": inst[p0:p1].reshape(h, w),
+                    "features": fout[D * p0:D * p1].reshape(h, w, D) if s.features else None})
+    return out
 
 
 def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cull: bool = False) -> list[dict]:
@@ -222,39 +305,15 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     if V == 0:
         return []
     nthr = numba.get_num_threads()
-    counts_n = np.array([v.size for v in views], np.int64)
-    goff = np.zeros(V + 1, np.int64)
-    np.cumsum(counts_n, out=goff[1:])
-    means = _concat(views, "means", 3, f32)
-    quats = _concat(views, "quats", 4, f32)
-    scales = _concat(views, "scales", 3, f32)
-    opac = _concat(views, "opacities", 0, f32)
-    colors = _concat(views, "colors", 3, f32)
-    ids = _concat(views, "ids", 0, np.int32)
-    n = means.shape[0]
-    if features:
-        dims = {-1 if v.features is None else (v.features[0].shape[1] if v.features else 0) for v in views}
-        if len(dims) != 1 or -1 in dims:
-            raise ValueError(f"Expected features of one dimension D in every view, found {sorted(dims)}")
-        feat = _concat(views, "features", dims.pop(), f32)
-    else:
-        feat = np.empty((n, 0), f32)
-    D = feat.shape[1]
-    sizes = np.array([(v.width, v.height, (v.width + 15) // 16) for v in views], np.int64)
-    ntiles = sizes[:, 2] * ((sizes[:, 1] + 15) // 16)
-    tstart = np.zeros(V + 1, np.int64)
-    np.cumsum(ntiles + 1, out=tstart[1:])
-    npx = sizes[:, 0] * sizes[:, 1]
-    pix_off = np.zeros(V + 1, np.int64)
-    np.cumsum(npx, out=pix_off[1:])
-    viewmats = np.ascontiguousarray(np.stack([v.viewmat for v in views]), f32)
-    Ks = np.ascontiguousarray(np.stack([v.K for v in views]), f32)
-    nears = np.array([v.near for v in views], f32)
-    bgs = np.ascontiguousarray(np.stack([v.background for v in views]), f32)
-
     ws = thread_workspace("batch")
-    kept = _kept_ranges(goff, means, scales, opac, ids, viewmats, Ks, sizes, nears, cull)
-    items, item_start = _work_items(goff, nthr, kept)
+    s = stage_views(views, features, cull, ws)
+    means, quats, scales, opac, colors, ids, feat = s.means, s.quats, s.scales, s.opac, s.colors, s.ids, s.feat
+    sizes, ntiles, tstart, pix_off = s.sizes, s.ntiles, s.tstart, s.pix_off
+    viewmats, Ks, nears, bgs = s.viewmats, s.Ks, s.nears, s.bgs
+    n = means.shape[0]
+    D = feat.shape[1]
+
+    items, item_start = _work_items(s.goff, nthr, s.kept)
     max_tiles = max(int(ntiles.max()), 1)
     rec = ws.get("rec", (n, NREC), f32)
     trect = ws.get("trect", (4, n), np.int32)
@@ -290,14 +349,7 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     claims = ws.get("claims", (V,), np.int64)
     _raster_items(claims, order, tstart, tile_start, lst_base, lst, rec, ids, feat, sizes, bgs, pix_off,
                   rgb, depth, alpha, inst, fout, _DUMMY_F, _DUMMY_I, keys, keys2, idx, idx2)
-    out = []
-    for v in range(V):
-        w, h = int(sizes[v, 0]), int(sizes[v, 1])
-        p0, p1 = int(pix_off[v]), int(pix_off[v + 1])
-        out.append({"rgb": rgb[3 * p0:3 * p1].reshape(h, w, 3), "depth": depth[p0:p1].reshape(h, w),
-                    "alpha": alpha[p0:p1].reshape(h, w), "instance": inst[p0:p1].reshape(h, w),
-                    "features": fout[D * p0:D * p1].reshape(h, w, D) if features else None})
-    return out
+    return view_outputs(s, rgb, depth, alpha, inst, fout)
 
 
 _DUMMY_F = np.empty((1, 1), np.float32)

@@ -1,0 +1,97 @@
+"""`submit_batch` / `cpu.claimed`: whole views claimed by several Python threads, bit-identical to
+`render_batch` and `render` whichever thread renders which view."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import morphosim_gym as ms
+from morphosim_gym.render.api import render_batch, submit_batch
+from morphosim_gym.render.cpu.batch import batch_view
+from morphosim_gym.render.cpu.claimed import ClaimedBatch, RenderHelpers
+from tests.render.test_batched import _SPECS, _assert_same, _views
+
+
+@pytest.mark.parametrize("helpers", [0, 1, 2])
+def test_claimed_views_are_bit_identical_to_single_renders(helpers):
+    views = _views(_SPECS)
+    pool = RenderHelpers(helpers)
+    try:
+        outs = submit_batch(views, helpers=pool).result()
+        again = submit_batch(views, helpers=pool).result()      # the helper threads serve batch after batch
+    finally:
+        pool.close()
+    assert len(outs) == len(views)
+    for (g, cam, bg), out, out2 in zip(views, outs, again):
+        single = ms.render(g, cam, background=bg)
+        _assert_same(out, single)
+        _assert_same(out2, single)
+
+
+def test_claimed_views_with_features_and_culling_match_render_batch():
+    views = _views(_SPECS[:4], d=3)
+    pool = RenderHelpers(1)
+    try:
+        for cull in (False, True):
+            got = submit_batch(views, helpers=pool, features=True, cull=cull).result()
+            ref = render_batch(views, features=True, cull=cull)
+            for a, b in zip(got, ref):
+                _assert_same(a, b, features=True)
+    finally:
+        pool.close()
+
+
+def test_two_threads_claiming_one_batch_split_its_views_and_match():
+    # both threads call work() on one batch at once: each view is rendered exactly once, by
+    # whichever thread claims it, and every image is the serial one
+    views = _views(_SPECS)
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    ref = ClaimedBatch(bvs)
+    assert ref.work() == len(views) and ref.finished and ref.work() == 0
+    ref_out = ref.outputs()
+    for _ in range(5):
+        batch = ClaimedBatch(bvs)
+        counts = []
+        worker = threading.Thread(target=lambda: counts.append(batch.work()))
+        worker.start()
+        counts.append(batch.work())
+        worker.join()
+        assert sum(counts) == len(views) and batch.finished
+        for a, b in zip(batch.outputs(), ref_out):
+            for k in ("rgb", "depth", "alpha", "instance"):
+                assert np.array_equal(a[k], b[k]), k
+
+
+def test_outputs_before_every_view_is_rendered_and_bad_helper_counts_are_refused():
+    views = _views(_SPECS[:2])
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    batch = ClaimedBatch(bvs)
+    with pytest.raises(RuntimeError, match="every view rendered"):
+        batch.outputs()
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ValueError, match="helpers"):
+            RenderHelpers(bad)
+    assert ClaimedBatch([]).work() == 0 and ClaimedBatch([]).outputs() == []
+
+
+@pytest.mark.parametrize("helpers", [0, 1])
+def test_partial_outputs_come_view_range_by_range_and_match(helpers):
+    # the vector env finishes env i as soon as its views are rendered: partial(lo, hi) renders or
+    # waits for exactly those views and gives what the whole batch gives for them
+    views = _views(_SPECS)
+    ref = render_batch(views)
+    pool = RenderHelpers(helpers)
+    try:
+        pending = submit_batch(views, helpers=pool)
+        got = pending.partial(0, 3, 30) + pending.partial(3, 4, 30) + pending.partial(4, len(views), 30)
+    finally:
+        pool.close()
+    for a, b in zip(got, ref):
+        _assert_same(a, b)
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    batch = ClaimedBatch(bvs)
+    assert batch.work(limit=2) == 2 and batch.views_done(0, 2) and not batch.views_done(0, 3)
+    assert len(batch.outputs(0, 2)) == 2
+    with pytest.raises(RuntimeError, match="every view rendered"):
+        batch.outputs(0, 3)
