@@ -25,7 +25,7 @@ import numpy as np
 from ._jit import NREC, atomic_add, jit
 from .batch import _MAX_TILE_LIST, BatchView, Staged, stage_views, view_outputs
 from .pipeline import Workspace
-from .binning import _fill_range, plan_tiles
+from .binning import _fill_range, bin_offsets, plan_tiles
 from .forward import _raster_tiles
 from .projection import _project_range
 
@@ -62,13 +62,7 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
     # offsets: per tile, the ranges in index order (each tile list ascending, as every other path)
     tile_start = np.empty(nt + 1, np.int64)
     off = np.empty((max(nr, 1), nt), np.int64)
-    acc = 0
-    for t in range(nt):
-        tile_start[t] = acc
-        for r in range(nr):
-            off[r, t] = acc
-            acc += counts[r, t]
-    tile_start[nt] = acc
+    acc = bin_offsets(counts[:nr], tile_start, off[:nr])
     lst = np.empty(max(acc, 1), np.int32)
     for r in range(nr):
         _fill_range(ranges[r0 + r, 0], ranges[r0 + r, 1], trect, tx, off[r], lst)
