@@ -11,7 +11,10 @@ a parallel one give bit-identical scenes (`Scene4D.content_hash`).
 
 Workers are forked where that is safe (Linux, and numba's threading layer is a fork-safe one:
 `morphosim_gym.parallel`), which also spares user scripts the `if __name__ == "__main__"`
-guard; otherwise spawned. Every wait is bounded: a scene that takes longer than `timeout_s`
+guard; otherwise spawned. A forked worker first runs a numba kernel with the scenes' thread
+settings and reports ready: forking a process whose other threads are inside a native thread
+pool (TBB, OpenMP, a tqdm lock) can leave the child stuck, and then the build starts again with
+spawned workers (`PoolStartWarning`; those need the guard and a picklable sim). Every wait is bounded: a scene that takes longer than `timeout_s`
 stops the build with a `ScenePoolError`, as does a worker that dies (killed, out of memory);
 an error raised while building a scene (a prompt the parser rejects, a clip that cannot be
 reconstructed) is raised again here as it was.
@@ -26,10 +29,13 @@ import time
 from contextlib import AbstractContextManager, contextmanager, nullcontext
 from typing import Any, Callable, Iterator, Optional, Sequence
 
+import numba
+import numpy as np
+
 from morphosim_gym.scene import Scene4D
 
-__all__ = ["build_scenes", "ScenePoolError", "POOL_BACKENDS", "DEFAULT_SCENE_TIMEOUT_S", "single_threaded",
-           "start_method"]
+__all__ = ["build_scenes", "ScenePoolError", "PoolStartWarning", "POOL_BACKENDS", "DEFAULT_SCENE_TIMEOUT_S",
+           "DEFAULT_START_TIMEOUT_S", "single_threaded", "start_method"]
 
 POOL_BACKENDS = ("process", "ray")
 DEFAULT_SCENE_TIMEOUT_S = 3600.0
@@ -114,11 +120,50 @@ def quiet(sim: Any) -> Any:
 
 # ------------------------------------------------------------------ worker side (process pool)
 _WORKER_SIM: Any = None
+DEFAULT_START_TIMEOUT_S = 60.0
+"""Seconds forked workers may take to report ready before the pool is rebuilt with spawned ones."""
 
 
-def _init_worker(sim: Any) -> None:
+class PoolStartWarning(RuntimeWarning):
+    """Forked scene workers did not start; the build goes on with spawned ones."""
+
+
+@numba.njit(parallel=True, cache=True)
+def _probe_kernel(x: np.ndarray) -> float:       # pragma: no cover - compiled
+    total = 0.0
+    for i in numba.prange(x.shape[0]):
+        total += x[i]
+    return total
+
+
+def _own_tqdm_lock() -> None:
+    """Give this (forked) worker a tqdm write lock of its own. tqdm's default lock is a
+    multiprocessing lock shared with the parent plus a thread lock copied from it: a child that
+    takes the shared one and then waits on a copied thread lock another parent thread held at
+    fork time never lets go of it, and a child killed while holding it freezes the parent's next
+    bar. Workers' bars are off (`quiet`), so they need no lock shared with anyone."""
+    import threading
+
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
+
+
+def _init_worker(sim: Any, ready: Any = None) -> None:
+    """Worker start: keep the sim, take a tqdm lock of its own, and, in a forked worker, run a
+    numba kernel with the thread settings every scene uses and report ready (a fork that left a
+    native thread pool broken hangs here, where the parent can see it, not in a scene)."""
     global _WORKER_SIM
+    import faulthandler
+    import signal
+
     _WORKER_SIM = sim
+    _own_tqdm_lock()
+    faulthandler.register(signal.SIGUSR1, all_threads=True)     # the parent asks for stacks before it kills
+    if ready is not None:
+        with single_threaded(_uses_torch(sim)):
+            _probe_kernel(np.ones(64, np.float32))
+        ready.put(os.getpid())
 
 
 def _worker_build(index: int, prompt: str, seed: int) -> tuple[int, Scene4D]:
@@ -145,8 +190,19 @@ def _serial(sim: Any, keys: Sequence[Key], timeout_s: float, tick: Callable[[], 
 
 
 def _kill(pool: Any) -> None:
-    """Stop a process pool's workers now (a timed-out build must not leave them fitting)."""
-    for proc in list(getattr(pool, "_processes", {}).values()):
+    """Stop a process pool's workers now (a timed-out build must not leave them fitting); each is
+    first asked for its threads' stacks (on its stderr), so a hang says where it was."""
+    import signal
+
+    procs = list(getattr(pool, "_processes", {}).values())
+    for proc in procs:
+        try:
+            os.kill(proc.pid, signal.SIGUSR1)
+        except Exception:  # pragma: no cover - already gone
+            pass
+    if procs:
+        time.sleep(0.5)
+    for proc in procs:
         try:
             proc.kill()
         except Exception:  # pragma: no cover - already gone
@@ -154,17 +210,60 @@ def _kill(pool: Any) -> None:
     pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _process(sim: Any, keys: Sequence[Key], workers: int, timeout_s: float, tick: Callable[[], None]
-             ) -> list[Scene4D]:
+class _NotStarted(Exception):
+    """Forked workers that did not report ready in time."""
+
+
+def _wait_ready(ready: Any, workers: int, timeout_s: float, pending: set) -> None:
+    """Wait for `workers` ready reports on `ready`, or for a scene future to finish first (a result,
+    an error or a dead pool: the build loop takes it from there); `_NotStarted` when neither comes."""
+    import queue
+
+    deadline = time.monotonic() + timeout_s
+    seen = 0
+    while seen < workers:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise _NotStarted(f"{seen} of {workers}")
+        try:
+            ready.get(timeout=min(left, 0.2))
+            seen += 1
+        except queue.Empty:
+            if any(f.done() for f in pending):
+                return
+
+
+def _process(sim: Any, keys: Sequence[Key], workers: int, timeout_s: float, tick: Callable[[], None],
+             start_timeout_s: float = DEFAULT_START_TIMEOUT_S) -> list[Scene4D]:
+    method = start_method()
+    if method == "fork":
+        _probe_kernel(np.ones(64, np.float32))       # compiled here, before the fork: workers inherit it
+        try:
+            return _pool_build(sim, keys, workers, timeout_s, tick, "fork", start_timeout_s)
+        except _NotStarted as exc:
+            import warnings
+
+            warnings.warn(f"Forked scene-building workers did not start within {start_timeout_s:.0f} s ({exc} "
+                          f"ready; a thread of this process was probably inside a native thread pool when it "
+                          f"forked): building with spawned workers instead", PoolStartWarning, stacklevel=3)
+    return _pool_build(sim, keys, workers, timeout_s, tick, "spawn", None)
+
+
+def _pool_build(sim: Any, keys: Sequence[Key], workers: int, timeout_s: float, tick: Callable[[], None],
+                method: str, start_timeout_s: Optional[float]) -> list[Scene4D]:
+    """One process-pool build; with `start_timeout_s`, the workers must report ready first."""
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
     from concurrent.futures.process import BrokenProcessPool
 
-    method = start_method()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method), initializer=_init_worker,
-                               initargs=(sim,))
+    ctx = mp.get_context(method)
+    ready = ctx.Queue() if start_timeout_s is not None else None
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker,
+                               initargs=(sim, ready))
     results: dict[int, Scene4D] = {}
     try:
         pending = {pool.submit(_worker_build, i, p, s) for i, (p, s) in enumerate(keys)}
+        if ready is not None:
+            _wait_ready(ready, min(workers, len(keys)), start_timeout_s, pending)
         rounds = -(-len(keys) // workers)
         deadline = time.monotonic() + timeout_s * rounds
         while pending:
@@ -234,7 +333,8 @@ def _ray(sim: Any, keys: Sequence[Key], workers: int, timeout_s: float, tick: Ca
 
 # ------------------------------------------------------------------ api
 def build_scenes(sim: Any, keys: Sequence[Key], workers: Optional[int] = 1, backend: str = "process",
-                 progress: Optional[bool] = None, timeout_s: Optional[float] = None) -> list[Scene4D]:
+                 progress: Optional[bool] = None, timeout_s: Optional[float] = None,
+                 start_timeout_s: float = DEFAULT_START_TIMEOUT_S) -> list[Scene4D]:
     """The scenes of `keys` ((prompt, seed) pairs), in order (see the module docstring).
 
     Args:
@@ -246,12 +346,16 @@ def build_scenes(sim: Any, keys: Sequence[Key], workers: Optional[int] = 1, back
         progress: a tqdm bar; None = only on a terminal.
         timeout_s: seconds one scene may take (default `DEFAULT_SCENE_TIMEOUT_S`); the build's
             limit is that times the rounds of `workers` it needs.
+        start_timeout_s: seconds forked workers may take to report ready; past it they are killed
+            and the build starts again with spawned workers (a `PoolStartWarning` says so).
     """
     if backend not in POOL_BACKENDS:
         raise ValueError(f"Expected pool backend in {POOL_BACKENDS}, found {backend!r}")
     timeout = DEFAULT_SCENE_TIMEOUT_S if timeout_s is None else float(timeout_s)
     if not timeout > 0:
         raise ValueError(f"Expected timeout_s > 0, found {timeout_s!r}")
+    if not float(start_timeout_s) > 0:
+        raise ValueError(f"Expected start_timeout_s > 0, found {start_timeout_s!r}")
     keys = [(str(p), int(s)) for p, s in keys]
     if not keys:
         return []
@@ -262,7 +366,8 @@ def build_scenes(sim: Any, keys: Sequence[Key], workers: Optional[int] = 1, back
     try:
         if n <= 1 and backend == "process":
             return _serial(sim, keys, timeout, bar.update)
-        run = _process if backend == "process" else _ray
-        return run(quiet(sim), keys, max(n, 1), timeout, bar.update)
+        if backend == "process":
+            return _process(quiet(sim), keys, max(n, 1), timeout, bar.update, float(start_timeout_s))
+        return _ray(quiet(sim), keys, max(n, 1), timeout, bar.update)
     finally:
         bar.close()

@@ -147,3 +147,60 @@ def test_builds_run_numba_torch_and_blas_on_one_thread():
         assert numba.get_num_threads() == 1 and torch.get_num_threads() == 1
         assert blas_threads() and all(n == 1 for n in blas_threads())
     assert (numba.get_num_threads(), torch.get_num_threads(), blas_threads()) == before
+
+
+class _UsesTqdm:
+    """A sim that draws a (hidden) tqdm bar while it builds, as reconstruction does."""
+
+    def generate(self, prompt, seed=0):
+        from tqdm import tqdm
+
+        for _ in tqdm(range(2), disable=True):
+            pass
+        return _oracle().generate(prompt, seed=seed)
+
+
+def test_workers_do_not_share_the_parents_tqdm_lock():
+    # tqdm's default lock is a multiprocessing lock shared across fork: held here (or by a child
+    # killed while holding it) it would stop every worker's bar
+    from tqdm import tqdm
+
+    if start_method() != "fork":
+        pytest.skip("workers are spawned here: they share no lock with this process")
+    with tqdm.get_lock():
+        scenes = build_scenes(_UsesTqdm(), PROMPTS[:2], workers=2, progress=False, timeout_s=30)
+    assert [s.provenance.prompt for s in scenes] == [p for p, _ in PROMPTS[:2]]
+
+
+_STUCK_FORK = """
+import os, time, warnings
+import morphosim_gym as ms
+from morphosim_gym.envs.pool import PoolStartWarning, build_scenes, start_method
+
+if __name__ == "__main__":
+    assert start_method() == "fork"
+    sim = ms.MorphoSim(reconstruction="oracle", generation=ms.GenerationConfig(detail=0.2))
+    keys = [("a red ball moves from left to right", 1), ("a blue cube moves from right to left", 2)]
+    serial = build_scenes(sim, keys, workers=1, progress=False)
+    os.register_at_fork(after_in_child=lambda: time.sleep(3600))      # every forked child is stuck
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        built = build_scenes(sim, keys, workers=2, progress=False, timeout_s=60, start_timeout_s=3)
+    print("WARNED", any(issubclass(w.category, PoolStartWarning) for w in caught))
+    print("SAME", [s.content_hash() for s in built] == [s.content_hash() for s in serial])
+"""
+
+
+def test_stuck_forked_workers_are_replaced_by_spawned_ones(tmp_path):
+    import subprocess
+    import sys
+
+    if start_method() != "fork":
+        pytest.skip("workers are spawned here")
+    script = tmp_path / "stuck_fork.py"
+    script.write_text(_STUCK_FORK)
+    start = time.monotonic()
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "WARNED True" in out.stdout and "SAME True" in out.stdout, out.stdout + out.stderr[-2000:]
+    assert time.monotonic() - start < 200
