@@ -163,4 +163,4 @@ def test_an_edited_selection_table_rereads_the_archive(tmp_path, monkeypatch):
 def test_real_0ad_named_things(tmp_path):
     names = {r.name for r in AssetIndex.build([REAL], cache_dir=tmp_path)}
     assert {"Well", "Mushroom", "Hoe", "Pickaxe", "Pitchfork", "Piglet", "Fishing boat", "Merchant ship", "Rowboat",
-            "Drum"} <= names
+            "Drum", "Flag", "Banner", "Cauldron", "Chariot"} <= names

@@ -122,7 +122,7 @@ GEAR: dict[str, tuple[str, str, tuple[str, ...]]] = {
 }
 # asset id -> (actor, name, category, tags): single actors of things with a plain name (tools, a well,
 # mushrooms, young animals, vessels: a hull with its mast, the first mesh of the actor, no sails or
-# oars from its props, and a drum), each looked at in a render (0 A.D.'s plants are alpha-textured cards that
+# oars from its props; a drum, a flag, a banner, a cauldron on its tripod, a chariot), each looked at in a render (0 A.D.'s plants are alpha-textured cards that
 # render as flat sheets, so none is here); an actor the archive lacks is left out
 NAMED: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "props/well": ("art/actors/props/special/eyecandy/well_1_a.xml", "Well", "prop", ("water well", "wishing well")),
@@ -150,6 +150,10 @@ NAMED: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "vessels/longship": ("art/actors/structures/viking/longship.xml", "Longship", "ship", ("viking ship",)),
     "vessels/han_merchant": ("art/actors/structures/han/merchant_ship.xml", "Junk ship", "ship", ("junk", "sailing ship")),
     "props/drum": ("art/actors/props/structures/mercenaries/kush_nuba_camp_drum_big_01.xml", "Drum", "prop", ("percussion",)),
+    "props/flag": ("art/actors/props/special/common/garrison_flag_rome.xml", "Flag", "prop", ("banner",)),
+    "props/banner": ("art/actors/props/units/standards/formation_flag_gaul.xml", "Banner", "prop", ("flag",)),
+    "props/cauldron": ("art/actors/props/structures/gauls/wonder_cauldron.xml", "Cauldron", "prop", ("pot", "tripod")),
+    "props/chariot": ("art/actors/props/special/eyecandy/unyoked_chariot_celt.xml", "Chariot", "prop", ("horse-drawn vehicle",)),
     "fauna/piglet": ("art/actors/fauna/piglet.xml", "Piglet", "animal", ("pig",)),
     "fauna/elephant_calf": ("art/actors/fauna/elephant_african_baby.xml", "Elephant calf", "elephant",
                             ("baby elephant",)),
