@@ -24,7 +24,7 @@ import re
 import numpy as np
 
 from ..assets import AssetError, AssetIndex, AssetRecord, asset_gaussians, default_sources
-from ..language.hypernyms import head_word, kind_category, ranked_senses
+from ..language.hypernyms import head_word, kind_category, ranked_senses, synonym_sibling
 from ..language.vocabulary import CATEGORIES
 from ..scene.parts import SurfaceCloud
 from ..scene.rotations import matrix_to_quat, quat_multiply
@@ -102,7 +102,9 @@ def _candidates(category: str, sources: tuple[str, ...] | None) -> tuple[AssetRe
     index = _index_for(sources)
     want = _words(category.replace("_", " "))
     entry = CATEGORIES.get(category)
-    synonyms = {w.lower() for w in (entry.synonyms if entry is not None else ()) if " " not in w}
+    # a synonym WordNet calls a sibling of the category ("stool" of chair, "ship" of boat) names no asset of it
+    synonyms = {w.lower() for w in (entry.synonyms if entry is not None else ())
+                if " " not in w and not synonym_sibling(w.lower())}
 
     excluded = EXCLUDED_WORDS.get(category, frozenset())
 

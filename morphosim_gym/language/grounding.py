@@ -151,8 +151,9 @@ def ground_noun(noun: str, settings: bool = False, floor: float | None = None, p
     compound = hypernyms.compound_tail(phrase) if phrase and phrase != noun else None
     hit = ground_noun_vocabulary(noun, settings) or ground_noun_vocabulary(singular(noun), settings)
     if hit is not None and not (compound and hit.kind == "category"
-                                and hypernyms.names_other_thing(compound, hit.category)):
-        return hit
+                                and hypernyms.names_other_thing(compound, hit.category)) \
+            and not (hit.kind == "category" and hypernyms.synonym_sibling(noun)):
+        return hit          # a synonym WordNet calls a sibling kind ("stool" of chair) is grounded as open
     if open_vocab.shape_for_word(noun):                                   # open vocabulary: basic shapes
         return Grounding(noun, open_vocab.shape_for_word(noun))
     mods = () if compound else _noun_modifiers(phrase or noun)
@@ -192,7 +193,8 @@ def _shows_modifiers(text: str) -> bool:
     if not mods:
         return True
     words = open_vocab.name_words(text)
-    return set(mods) <= words or len(re.findall(r"[a-z]+", text.lower().removeprefix("a "))) <= 1
+    plain = hypernyms.plain_name(text)                     # "Frame Chambord" is a frame alone
+    return set(mods) <= words or len(re.findall(r"[a-z]+", plain.lower().removeprefix("a "))) <= 1
 
 
 def _ground_by_level(noun: str, phrase: str | None, settings: bool, floor: float, kind_noun: str) -> Grounding:
@@ -306,6 +308,12 @@ def _ground_checked(noun: str, phrase: str, settings: bool, floor: float, kind_n
             break
         if kind_ == "open" and not _shows_modifiers(text):
             continue      # "Water cooler" does not show a rice cooker: at most a stand-in
+        if kind_ != "setting" and hypernyms.contradicts(kind_noun, text=None if kind_ == "category" else text,
+                                                        category=label if kind_ == "category" else None,
+                                                        tags=tags.get(label, ())):
+            continue      # a sibling kind ("stool" -> chair) or another sense ("light bulb" -> the lamp): a stand-in at most
+        if kind_ == "open" and hypernyms.related(kind_noun, text, tags=tags.get(label, ())) is False:
+            continue      # an asset WordNet knows shows the noun only as its thing or a kind of it, never by similarity
         if sim >= CHECKED_FLOOR or (kind_ != "setting" and hypernyms.related(kind_noun, text, tags=tags.get(label, ()))):
             method = "open" if kind_ == "open" else "embedding"
             return Grounding(noun, label, kind="category" if kind_ == "open" else kind_, method=method,

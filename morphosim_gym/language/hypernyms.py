@@ -19,10 +19,11 @@ from collections.abc import Iterable
 from functools import lru_cache
 
 from . import embeddings, wordnet
-from .vocabulary import singular
+from .vocabulary import CATEGORIES, singular
 
-__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "MIN_SENSE_SHARE", "compound_tail", "head_word", "kind_category", "names_other_thing", "noun_sense_count", "ranked_senses", "related",
-           "shared_kind", "visible_senses", "weighted_senses"]
+__all__ = ["GENERIC_KINDS", "MAX_ASSET_DEPTH", "MIN_SENSE_SHARE", "compound_tail", "contradicts", "head_word",
+           "kind_category", "linked", "names_other_thing", "noun_sense_count", "plain_name", "ranked_senses", "related",
+           "shared_kind", "synonym_sibling", "visible_senses", "weighted_senses"]
 
 SENSES = 3                 # a word's most frequent senses that count
 MAX_ASSET_DEPTH = 1        # a noun is shown by an asset named by its direct hypernym ("sedan" -> "Car")...
@@ -31,10 +32,26 @@ PERSON_CATEGORIES = ("person", "snowboarder")
 _CUT = re.compile(r"\s+(?:with|of|for|on|in|and|from)\s+|[(,\-:]")
 
 
+def plain_name(text: str) -> str:
+    """A name without the proper names trailing its head ("Frame Chambord", "Frame Hôi An" -> "Frame"):
+    of the capitalised words that end it (never the first word), those from the first that WordNet
+    does not know as a noun or that holds letters outside a-z ("Chair Ikea" -> "Chair", "Coffee
+    Maker" stays). The name itself when nothing trails, or without WordNet."""
+    words = text.split()
+    if not wordnet.available():
+        return text
+    start = len(words)
+    while start > 1 and words[start - 1][:1].isupper():
+        start -= 1                                 # the capitalised words that end the name...
+    cut = next((i for i in range(start, len(words)) if not re.fullmatch(r"[A-Za-z]+", words[i])
+                or not wordnet.senses(words[i].lower(), 1)), len(words))
+    return " ".join(words[:cut])                   # ... from the first that is no English noun
+
+
 def head_word(text: str) -> str:
     """The head noun of a name: the last word before any "with"/"of"... clause ("Bowl with fruits"
-    -> "bowl"), lower case, digits dropped, crudely singular."""
-    first = _CUT.split(text.lower(), maxsplit=1)[0]
+    -> "bowl") and the proper names after it (`plain_name`), lower case, digits dropped, crudely singular."""
+    first = _CUT.split(plain_name(text).lower(), maxsplit=1)[0]
     words = re.findall(r"[a-z]+", first)
     return singular(words[-1]) if words else ""
 
@@ -98,6 +115,10 @@ def _gloss_nearness(word: str, tied: list[tuple[int, wordnet.Synset]]) -> dict[i
 def _category_senses(category: str) -> frozenset[int]:
     if category == "person":                            # person.n.01 sits at the top of WordNet
         return frozenset(s.offset for s in wordnet.senses(category, 1))
+    declared = CATEGORIES[category].sense if category in CATEGORIES else 0
+    if declared:                                        # the sense the generator builds (the lamp is furniture)
+        found = wordnet.senses(category, declared)
+        return frozenset({found[declared - 1].offset}) if len(found) >= declared else frozenset()
     senses = weighted_senses(category, person=category in PERSON_CATEGORIES)[:SENSES]
     if any(s.lexfile == "animal" for s in senses):      # "bird" the animal, not its meat
         senses = tuple(s for s in senses if s.lexfile != "food")
@@ -154,7 +175,12 @@ def _text_senses(text: str, tags: tuple[str, ...] = ()) -> tuple[wordnet.Synset,
     whole = ranked_senses(" ".join(words)) if len(words) > 1 else ()
     if whole:
         return whole[:1]
-    senses = ranked_senses(head_word(text))
+    head = head_word(text)
+    for tag in tags:     # a tag that makes the head a compound WordNet knows: "Frame" tagged "Picture"
+        compound = ranked_senses(f"{tag.lower()} {head}") if head and tag.lower() != head else ()
+        if compound:
+            return compound[:1]
+    senses = ranked_senses(head)
     named = {"_".join(t.lower().split()) for t in tags}
     return tuple(x for x in senses if named & set(x.lemmas))[:1] or senses[:1]
 
@@ -228,3 +254,75 @@ def shared_kind(noun: str, text: str | None = None, category: str | None = None,
     if best is None:
         return None
     return best[0], wordnet.synset(best[1]).lemmas[0].replace("_", " ")
+
+
+# -- what WordNet says a candidate is not ----------------------------------------------------------
+
+
+# a kind shared this close above the noun makes a candidate a sibling (`contradicts`); farther up
+# ("conveyance" for a locomotive and a train) WordNet's tree says too little to overrule similarity
+SIBLING_DEPTH = 2
+
+
+def _candidate_senses(text: str | None, category: str | None, tags: tuple[str, ...]) -> list[int]:
+    """The senses a candidate shows: a generator category's (`_category_senses`), else its name's dominant one."""
+    if category is not None:
+        return sorted(_category_senses(category))
+    return [x.offset for x in _text_senses(text, tags)] if text else []
+
+
+def _is_linked(mine: tuple[wordnet.Synset, ...], theirs: list[int]) -> bool:
+    """Whether one of the noun's senses is one of the candidate's, a kind of it, or the other way."""
+    return any(n.offset in _closure(t) or t in _closure(n.offset) for n in mine for t in theirs)
+
+
+def linked(noun: str, text: str | None = None, category: str | None = None,
+           tags: tuple[str, ...] = ()) -> bool | None:
+    """Whether a candidate (a name `text` or a generator `category`) is the noun's thing, a kind of it,
+    or a thing the noun is a kind of ("Bedside table" for a nightstand, a table). None when WordNet
+    is missing or knows either not as a visible thing."""
+    mine = _noun_senses(noun) if wordnet.available() else ()
+    theirs = _candidate_senses(text, category, tuple(tags)) if mine else []
+    if not mine or not theirs:
+        return None
+    return _is_linked(mine, theirs)
+
+
+def contradicts(noun: str, text: str | None = None, category: str | None = None,
+                tags: tuple[str, ...] = ()) -> str | None:
+    """Why WordNet says a candidate shows another thing than the noun however similar they are, or
+    None. Not `linked`, and either a sibling (the noun's dominant sense and the candidate are kinds
+    of one meaningful sense at most `SIBLING_DEPTH` steps above the noun: a stool and a chair are
+    seats, "sibling of seat"; a locomotive and a train only conveyances, no sibling) or the noun a
+    kind of another sense of a category's word than the one the category declares it builds
+    (`Category.sense`: a light bulb is a lamp, the light source; the lamp category is the
+    furniture: "another sense of lamp"). None without WordNet."""
+    if linked(noun, text, category, tags) is not False:
+        return None
+    mine = _noun_senses(noun)
+    up = _closure(mine[0].offset)
+    theirs = _candidate_senses(text, category, tuple(tags))
+    shared = [(d, off) for t in theirs for off in _closure(t) for d in [up.get(off)]
+              if d is not None and d <= SIBLING_DEPTH and _meaningful(off)]
+    if shared:
+        return f"sibling of {wordnet.synset(min(shared)[1]).lemmas[0].replace('_', ' ')}"
+    declared = category is not None and category in CATEGORIES and CATEGORIES[category].sense
+    if declared and any(x.offset in up for x in wordnet.senses(category) if x.offset not in theirs):
+        return f"another sense of {category}"
+    return None
+
+
+@lru_cache(maxsize=1024)
+def synonym_sibling(word: str) -> str | None:
+    """For a synonym of the rule vocabulary that WordNet says is another thing than its category
+    ("stool" of the chair category: `contradicts`), why; None for the category's own name, its
+    plural, a synonym that is a kind of it ("taxi" of car) and words WordNet does not know."""
+    from .vocabulary import noun_to_category
+
+    hit = noun_to_category(word)
+    if hit is None or not wordnet.available():
+        return None
+    noun = singular(word) if hit[1] else word
+    if noun == hit[0] or word == CATEGORIES[hit[0]].plural:
+        return None
+    return contradicts(noun, category=hit[0])

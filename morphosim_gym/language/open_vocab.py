@@ -180,7 +180,10 @@ def _tag_named(noun: str, texts: list[str], tags: list[tuple[str, ...]], vecs: n
     if not hits or len(hits) > RARE_TAG:
         return []
     sims = vecs[hits] @ embeddings.embed([f"a {noun}"])[0]
-    return [i for i, s in zip(hits, sims) if float(s) >= TAG_NAME_FLOOR]
+    # a tag may narrow the name ("nightstand" on "Bedside table", a kind of table), never contradict it:
+    # a "Towel" tagged "blanket" is no blanket when WordNet relates neither to the other
+    return [i for i, s in zip(hits, sims) if float(s) >= TAG_NAME_FLOOR
+            and hypernyms.linked(noun, text=texts[i], tags=tags[i]) is not False]
 
 
 def ground_named(noun: str) -> OpenMatch | None:

@@ -28,6 +28,9 @@ class Category:
         plural: the plural of `name` (irregular ones matter: "fish", "sheep", "mice").
         description: a short phrase embedded for grounding unknown nouns.
         habitat: the setting used when the text names none, or None.
+        sense: which WordNet sense of `name` (1 = its first in WordNet) the generator builds, when
+            not the word's dominant ones (0): the lamp category is a table lamp, a piece of
+            furniture, not any "artificial source of visible illumination" such as a light bulb.
     """
 
     name: str
@@ -35,10 +38,12 @@ class Category:
     plural: str = ""
     description: str = ""
     habitat: str | None = None
+    sense: int = 0
 
 
-def _c(name: str, synonyms: str = "", plural: str = "", description: str = "", habitat: str | None = None) -> Category:
-    return Category(name, tuple(synonyms.split()), plural or name + "s", description or f"a {name}", habitat)
+def _c(name: str, synonyms: str = "", plural: str = "", description: str = "", habitat: str | None = None,
+       sense: int = 0) -> Category:
+    return Category(name, tuple(synonyms.split()), plural or name + "s", description or f"a {name}", habitat, sense)
 
 
 _CATEGORY_LIST: tuple[Category, ...] = (
@@ -75,7 +80,7 @@ _CATEGORY_LIST: tuple[Category, ...] = (
     _c("bowl", "", "", "a bowl, a round dish"),
     _c("apple", "", "", "an apple, a fruit"),
     _c("banana", "", "", "a banana, a yellow fruit"),
-    _c("lamp", "", "", "a lamp, a light"),
+    _c("lamp", "", "", "a lamp, a light", sense=2),
     _c("vase", "", "", "a vase for flowers"),
     _c("book", "", "", "a book to read"),
     _c("cone", "", "", "a cone, a traffic cone"),

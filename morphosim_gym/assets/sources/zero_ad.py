@@ -6,7 +6,7 @@ stored converted as `art/meshes/skeletal/tiger.dae.cached.pmd`) and a colour tex
 stored as `art/textures/skins/<file>.cached.dds`). The useful subset is chosen by table: one asset
 per animal species (`FAUNA`, by actor) and per kind of prop (`PROPS`, the first actor, by name,
 whose stem holds the keyword; weapons and armour from the unit props, `GEAR`; single named actors of
-tools, mushrooms, young animals and a few more, `NAMED`). An actor whose mesh or texture is missing or unreadable is
+tools, mushrooms, young animals, vessels and a few more, `NAMED`). An actor whose mesh or texture is missing or unreadable is
 skipped with an `AssetWarning`; the other assets stay usable.
 
 Units: 0 A.D. models are about 2.5 units to the metre (a horse stands ~5.6 units at the head).
@@ -121,7 +121,8 @@ GEAR: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "hammer": ("Hammer", "prop", ("tool",)),
 }
 # asset id -> (actor, name, category, tags): single actors of things with a plain name (tools, a well,
-# mushrooms, young animals), each looked at in a render (0 A.D.'s plants are alpha-textured cards that
+# mushrooms, young animals, vessels: a hull with its mast, the first mesh of the actor, no sails or
+# oars from its props; a drum, a flag, a banner, a cauldron on its tripod, a chariot), each looked at in a render (0 A.D.'s plants are alpha-textured cards that
 # render as flat sheets, so none is here); an actor the archive lacks is left out
 NAMED: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "props/well": ("art/actors/props/special/eyecandy/well_1_a.xml", "Well", "prop", ("water well", "wishing well")),
@@ -141,6 +142,18 @@ NAMED: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "fungi/mushroom": ("art/actors/fungi/tall_agaric.xml", "Mushroom", "prop", ("toadstool", "fungus", "agaric")),
     "fungi/chanterelle": ("art/actors/fungi/small_chanterelle.xml", "Chanterelle mushroom", "prop",
                           ("mushroom", "fungus")),
+    "vessels/fishing_boat": ("art/actors/structures/celts/fishing_boat.xml", "Fishing boat", "boat", ("boat",)),
+    "vessels/merchant_ship": ("art/actors/structures/celts/merchant_ship.xml", "Merchant ship", "ship",
+                              ("ship", "sailing ship", "merchantman")),
+    "vessels/rowboat": ("art/actors/structures/celts/rowboat.xml", "Rowboat", "boat", ("boat",)),
+    "vessels/trireme": ("art/actors/structures/hellenes/trireme.xml", "Trireme", "ship", ("galley", "warship")),
+    "vessels/longship": ("art/actors/structures/viking/longship.xml", "Longship", "ship", ("viking ship",)),
+    "vessels/han_merchant": ("art/actors/structures/han/merchant_ship.xml", "Junk ship", "ship", ("junk", "sailing ship")),
+    "props/drum": ("art/actors/props/structures/mercenaries/kush_nuba_camp_drum_big_01.xml", "Drum", "prop", ("percussion",)),
+    "props/flag": ("art/actors/props/special/common/garrison_flag_rome.xml", "Flag", "prop", ("banner",)),
+    "props/banner": ("art/actors/props/units/standards/formation_flag_gaul.xml", "Banner", "prop", ("flag",)),
+    "props/cauldron": ("art/actors/props/structures/gauls/wonder_cauldron.xml", "Cauldron", "prop", ("pot", "tripod")),
+    "props/chariot": ("art/actors/props/special/eyecandy/unyoked_chariot_celt.xml", "Chariot", "prop", ("horse-drawn vehicle",)),
     "fauna/piglet": ("art/actors/fauna/piglet.xml", "Piglet", "animal", ("pig",)),
     "fauna/elephant_calf": ("art/actors/fauna/elephant_african_baby.xml", "Elephant calf", "elephant",
                             ("baby elephant",)),

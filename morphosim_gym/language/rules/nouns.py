@@ -279,7 +279,8 @@ def _classify_head(np_: NounPhrase) -> None:
         np_.kind = "viewer"
     elif head in ALL_WORDS or head in ("scene", "all"):
         np_.kind = "all"
-    elif hit is not None and (setting is None or head == "table" or head in CATEGORIES):
+    elif hit is not None and (setting is None or head == "table" or head in CATEGORIES) \
+            and not hypernyms.synonym_sibling(head):    # "stool" is no chair: grounded as an open noun
         np_.kind, np_.category, np_.plural = "category", hit[0], hit[1]
     elif setting is not None:
         np_.kind, np_.category = "setting", setting
