@@ -90,3 +90,17 @@ def test_a_candidate_is_read_through_its_dominant_sense():
     # "Peacock" is the bird: it shares nothing meaningful with a spider (not "arthropod" via the butterfly)
     assert hypernyms.shared_kind("spider", text="Peacock") is None
     assert hypernyms.shared_kind("turtle", text="Helmet") is None          # the reptile, not the turtleneck
+
+
+@needs_wordnet
+def test_ly_nouns_are_not_adverbs():
+    from morphosim_gym.errors import CommandError
+    from morphosim_gym.language import parse
+    from morphosim_gym.language.rules.tokens import is_adverb
+
+    assert is_adverb("slowly") and is_adverb("steadily")
+    assert not is_adverb("butterfly") and not is_adverb("dragonfly")
+    assert parse("a dog runs quickly to the right").motions[0].speed_word == "quickly"
+    # the noun reaches grounding (which refuses it: no insect asset), not a parser dead end
+    with pytest.raises(CommandError, match="noun 'dragonfly': it is not close to any object category"):
+        parse("a dragonfly moves left slowly")

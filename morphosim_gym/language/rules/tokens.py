@@ -9,6 +9,7 @@ from typing import Any
 
 from ...colors import is_color_word, match_color
 from ...errors import CommandError
+from .. import wordnet
 from ..count_words import refuse_unbounded_count
 from ..lexicon import (
     AUX,
@@ -104,7 +105,10 @@ def tokenize(text: str) -> list[str]:
 
 
 def is_adverb(w: str) -> bool:
-    return len(w) >= 6 and w.endswith("ly") and noun_to_category(w) is None and w not in COLLECTIVE_NOUNS
+    """A 6+ letter "-ly" word that names no thing: "slowly", "steadily" are adverbs; "butterfly",
+    "dragonfly" (WordNet nouns one can see) and vocabulary nouns are not."""
+    return (len(w) >= 6 and w.endswith("ly") and noun_to_category(w) is None and w not in COLLECTIVE_NOUNS
+            and not wordnet.is_visible_noun(w))
 
 
 def is_number(w: str) -> bool:
