@@ -2,7 +2,9 @@
 
 import pytest
 
-from morphosim_gym.language import hypernyms, wordnet
+from morphosim_gym.errors import CommandError
+from morphosim_gym.language import hypernyms, parse, wordnet
+from morphosim_gym.language.rules.tokens import is_adverb
 from morphosim_gym.language.vocabulary import CATEGORIES
 
 needs_wordnet = pytest.mark.skipif(not wordnet.available(), reason="needs WordNet (apt install wordnet-base)")
@@ -94,10 +96,6 @@ def test_a_candidate_is_read_through_its_dominant_sense():
 
 @needs_wordnet
 def test_ly_nouns_are_not_adverbs():
-    from morphosim_gym.errors import CommandError
-    from morphosim_gym.language import parse
-    from morphosim_gym.language.rules.tokens import is_adverb
-
     assert is_adverb("slowly") and is_adverb("steadily")
     assert not is_adverb("butterfly") and not is_adverb("dragonfly")
     assert parse("a dog runs quickly to the right").motions[0].speed_word == "quickly"
