@@ -21,7 +21,7 @@ from gymnasium.envs.registration import load_env_creator
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from morphosim_gym.render.api import PendingRender, render_batch, submit_batch
+from morphosim_gym.render.api import PendingRender, open_batch, render_batch
 from morphosim_gym.render.cpu.claimed import RenderHelpers
 from morphosim_gym.render.cpu.pipeline import Workspace
 
@@ -135,6 +135,7 @@ class MorphoSimVectorEnv(VectorEnv):
         self._worker: Optional[ThreadPoolExecutor] = None
         self._helpers: Optional[RenderHelpers] = None
         self._workspaces: list = []              # staging buffers of the "views" scheduler, one per chunk
+        self._gaussians: dict = {}               # per chunk: Gaussians to make room for (last steps' most, + 25%)
         self.envs = _make_envs(creator, kwargs, per_env)
         self.backend = backend if backend is not None else self.envs[0].render_backend
         self._pending: list[list] = [[] for _ in range(n)]
@@ -170,9 +171,7 @@ class MorphoSimVectorEnv(VectorEnv):
     # ================================================================== step
     def step(self, actions: Any) -> tuple[dict, np.ndarray, np.ndarray, np.ndarray, dict]:
         n = self.num_envs
-        acts = list(iterate(self.action_space, actions))
-        if len(acts) != n:
-            raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
+        acts = self._checked_actions(actions)
         rewards = np.zeros(n, dtype=np.float64)
         terms = np.zeros(n, dtype=bool)
         truncs = np.zeros(n, dtype=bool)
@@ -181,31 +180,58 @@ class MorphoSimVectorEnv(VectorEnv):
         # resets of unwrapped envs join the first chunk's render (serial batch only); the others reset here
         joining = [i for i in resetting if self._steppers[i] is None] if self._pipeline_chunks() == 1 else []
         reset_out = {i: (self._steppers[i] or self.envs[i]).reset() for i in resetting if i not in joining}
-        # chunk by chunk: advance and build the render requests, hand the chunk's render to the
-        # worker, finish the previous chunk (reward, observation, info) while this one renders
+        # chunk by chunk: advance and build the render requests ("views": each view is handed to the
+        # render helpers as soon as its env is advanced), start the chunk's render, finish the
+        # previous chunk (reward, observation, info) while this one renders
         pending: deque = deque()
         extra: dict = {}
         checked: dict = {}
         stepped: list = []
         chunks = self._chunks(stepping) or [[]]
         chunks[0] = joining + chunks[0]
-        for c, chunk in enumerate(chunks):
-            if not chunk:
-                continue
-            requests = self._prepare(chunk, acts, checked, extra)
-            pending.append((chunk, requests, self._launch(requests, c)))
-            if len(pending) > 1:
+        try:
+            for c, chunk in enumerate(chunks):
+                if not chunk:
+                    continue
+                sink = self._open(c, chunk)
+                pending.append((chunk, None, sink))
+                requests = self._prepare(chunk, acts, checked, extra, sink)
+                pending[-1] = (chunk, requests, self._launch(requests, c, sink))
+                if len(pending) > 1:
+                    self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
+            while pending:
                 self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
-        while pending:
-            self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
-        infos: dict = {}
+        except BaseException:
+            for _, _, launched in pending:     # no helper may still write into a workspace the next step reuses
+                if isinstance(launched, PendingRender):
+                    launched.cancel()
+            raise
+        entries = []
         for i in resetting:                      # reset infos first, then the steps', as each env's own order
             self._obs[i], info = reset_out[i]
-            infos = self._add_info(infos, info, i)
-        for i, info in stepped:
-            infos = self._add_info(infos, info, i)
+            entries.append((i, info))
+        infos = self._batch_infos(entries + stepped)
         self._autoreset = terms | truncs
         return self._batched_obs(), rewards, terms, truncs, infos
+
+    def _checked_actions(self, actions: Any) -> list:
+        """Every env's action, checked before any env is stepped (a bad one raises, naming its env,
+        and no env moves): float64 clipped to [-1, 1], as `check_action` gives a single env."""
+        n = self.num_envs
+        acts = list(iterate(self.action_space, actions))
+        if len(acts) != n:
+            raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
+        shape = self.single_action_space.shape
+        out = []
+        for i, a in enumerate(acts):
+            if self._steppers[i] is not None:
+                out.append(a)                    # its wrapper sees the action as given; `_advance` checks it
+                continue
+            try:
+                out.append(check_action(a, shape))
+            except ValueError as exc:
+                raise ValueError(f"Expected a valid action for env {i}: {exc}; no env was stepped") from None
+        return out
 
     def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
                 terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
@@ -239,13 +265,13 @@ class MorphoSimVectorEnv(VectorEnv):
         action and the info keys its wrapper added."""
         env = self.envs[i]
         wrapper = self._steppers[i]
-        if wrapper is not None:
-            pending = self._pending[i]
-            pending.clear()
-            wrapper.step(action)
-            action, extra = pending.pop()
-        else:
-            extra = {}
+        if wrapper is None:                      # checked already (`_checked_actions`)
+            env._advance(action)
+            return action, {}
+        pending = self._pending[i]
+        pending.clear()
+        wrapper.step(action)
+        action, extra = pending.pop()
         a = check_action(action, env.action_space.shape)
         env._advance(a)
         return a, extra
@@ -259,11 +285,12 @@ class MorphoSimVectorEnv(VectorEnv):
     def _pipeline_chunks(self) -> int:
         return 1 if self.pipeline is None else self.pipeline   # None: one chunk (see __init__)
 
-    def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict) -> list:
+    def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict, sink: Optional[PendingRender]) -> list:
         """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
-        and `extra`), or begin its reset if it is resetting (it stays out of `checked`), and build its `_render_request`; one `numba_threads` per
-        run of envs with the same `render_threads` (it is not free: a lock and two thread-count
-        changes)."""
+        and `extra`), or begin its reset if it is resetting (it stays out of `checked`), and build
+        its `_render_request`, whose views go into `sink` at once when given (then closed); one
+        `numba_threads` per run of envs with the same `render_threads` (it is not free: a lock and
+        two thread-count changes)."""
         requests = []
         for threads, run in _runs(chunk, [self.envs[i].config.render_threads for i in chunk]):
             with numba_threads(threads):
@@ -274,19 +301,39 @@ class MorphoSimVectorEnv(VectorEnv):
                         env._reset_begin(ResetOptions.parse(None))
                     else:
                         checked[i], extra[i] = self._advance(i, acts[i])
-                    requests.append(env._render_request(env.world.t))
+                    request = env._render_request(env.world.t)
+                    requests.append(request)
+                    if sink is not None:
+                        sources, cams, bg, sky = request
+                        for cam in cams:
+                            sink.add((sources, cam, bg, sky))
+        if sink is not None:
+            sink.close()
         return requests
 
-    def _launch(self, requests: list, slot: int = 0) -> Any:
-        """The batched render of these requests, started: a `PendingRender` (scheduler "views"),
-        else a `Future` from the worker thread when pipelined (more than one chunk), else the
-        outputs themselves."""
+    def _open(self, slot: int, chunk: list) -> Optional[PendingRender]:
+        """The "views" scheduler's open batched render of a chunk (None for "numba"), sized for its
+        views and pixels and for the most Gaussians its slot has seen."""
+        if self.scheduler != "views":
+            return None
+        while len(self._workspaces) <= slot:
+            self._workspaces.append(Workspace())
+        views = pixels = 0
+        for i in chunk:
+            env = self.envs[i]
+            views += len(env._render_cams)
+            pixels += len(env._render_cams) * env.config.width * env.config.height
+        return open_batch(helpers=self._render_helpers(), backend=self.backend, lod=self.envs[0].config.render_lod,
+                          workspace=self._workspaces[slot], capacity=(views, self._gaussians.get(slot, 0), pixels))
+
+    def _launch(self, requests: list, slot: int = 0, sink: Optional[PendingRender] = None) -> Any:
+        """The batched render of these requests, started: `sink` itself (scheduler "views", already
+        closed), else a `Future` from the worker thread when pipelined (more than one chunk), else
+        the outputs themselves."""
+        if sink is not None:
+            self._gaussians[slot] = max(self._gaussians.get(slot, 0), int(1.25 * sink.staged[1]))
+            return sink
         views = [(sources, cam, bg, sky) for sources, cams, bg, sky in requests for cam in cams]
-        if self.scheduler == "views":
-            while len(self._workspaces) <= slot:
-                self._workspaces.append(Workspace())
-            return submit_batch(views, helpers=self._render_helpers(), backend=self.backend,
-                                lod=self.envs[0].config.render_lod, workspace=self._workspaces[slot])
         if self._pipeline_chunks() == 1:
             return self._render_views(views)
         if self._worker is None:
@@ -340,6 +387,40 @@ class MorphoSimVectorEnv(VectorEnv):
             mask[env_num] = True
             vector_infos[key], vector_infos[mask_key] = array, mask
         return vector_infos
+
+    def _batch_infos(self, entries: list) -> dict:
+        """`_add_info` of each (env index, info) in order, key by key: one array, one mask and one
+        assignment per key for all envs instead of per env (same arrays, dtypes, masks and key
+        order; a key whose values mix dicts and non-dicts takes `_add_info` env by env)."""
+        columns: dict = {}
+        for i, info in entries:
+            for key, value in info.items():
+                column = columns.get(key)
+                if column is None:
+                    columns[key] = [(i, value)]
+                else:
+                    column.append((i, value))
+        n = self.num_envs
+        out: dict = {}
+        for key, column in columns.items():
+            kinds = {isinstance(v, dict) for _, v in column}
+            if key == "final_obs":
+                array = np.full(n, fill_value=None, dtype=object)
+                for i, v in column:
+                    array[i] = v
+            elif len(kinds) > 1:
+                sequential: dict = {}
+                for i, info in entries:
+                    sequential = self._add_info(sequential, info, i)
+                return sequential
+            elif kinds == {True}:
+                array = self._batch_infos(column)
+            else:
+                array = _info_column(column, n)
+            mask = np.zeros(n, dtype=np.bool_)
+            mask[[i for i, _ in column]] = True
+            out[key], out[f"_{key}"] = array, mask
+        return out
 
     def _batched_obs(self) -> dict:
         return concatenate(self.single_observation_space, self._obs,
@@ -438,6 +519,22 @@ def _info_array(value: Any, n: int) -> np.ndarray:
     if isinstance(value, np.ndarray):
         return np.zeros((n, *value.shape), dtype=value.dtype)
     return np.full(n, fill_value=None, dtype=object)
+
+
+def _info_column(column: list, n: int) -> np.ndarray:
+    """The batch array of one info key from its (env index, value) pairs, as `_info_array` and
+    one assignment per env make it; values of the first one's type (and shape) go in at once."""
+    first = column[0][1]
+    array = _info_array(first, n)
+    kind = type(first)
+    if array.dtype != object and all(type(v) is kind for _, v in column) and (
+            kind is not np.ndarray or all(v.shape == first.shape and v.dtype == first.dtype for _, v in column)):
+        values = [v for _, v in column]
+        array[[i for i, _ in column]] = np.stack(values) if kind is np.ndarray else values
+        return array
+    for i, v in column:
+        array[i] = v
+    return array
 
 
 def _make_envs(creator: Callable[..., gym.Env], kwargs: Mapping[str, Any],

@@ -20,7 +20,7 @@ from ..scene.gaussians import Gaussians
 from ..scene.scene4d import Scene4D
 from ..scene.sky import check_sky
 
-__all__ = ["RenderOutput", "render", "render_batch", "submit_batch", "PendingRender", "rasterize", "BACKENDS", "cameras_to_arrays"]
+__all__ = ["RenderOutput", "render", "render_batch", "open_batch", "submit_batch", "PendingRender", "rasterize", "BACKENDS", "cameras_to_arrays"]
 
 BACKENDS = ("cpu", "torch", "gsplat")
 _OUTPUT_KEYS = ("rgb", "depth", "alpha", "instance", "features")
@@ -198,58 +198,217 @@ def render_batch(views: Sequence[View], t: float = 0.0, *, backend: str = "cpu",
 
 
 class PendingRender:
-    """A batched render under way (`submit_batch`): `result()` gives `render_batch`'s list."""
+    """A batched render under way (`open_batch`, `submit_batch`): views are `add`ed one at a
+    time (helper threads start on the first while the caller prepares the next), then the batch
+    is `close`d, and `partial(lo, hi)` / `result()` give `render_batch`'s outputs for them.
 
-    def __init__(self, helpers: Any = None, batch: Any = None, resolved: Optional[list] = None,
-                 outs: Optional[list] = None) -> None:
-        self._helpers, self._batch, self._resolved, self._outs = helpers, batch, resolved, outs
+    Arguments as for `open_batch`.
+    """
 
+    def __init__(self, helpers: Any = None, t: float = 0.0, *, backend: str = "cpu", features: bool = False,
+                 cull: bool = False, lod: bool = False, lod_tol: float = 1.0, workspace: Any = None,
+                 capacity: Optional[tuple[int, int, int]] = None) -> None:
+        if backend not in BACKENDS:
+            raise ValueError(f"Expected backend in {BACKENDS}, found {backend!r}")
+        if capacity is not None and (len(capacity) != 3 or any(int(c) < 0 for c in capacity)):
+            raise ValueError(f"Expected capacity as (views, Gaussians, pixels) >= 0, found {capacity!r}")
+        if helpers is None:
+            from .cpu.claimed import RenderHelpers
+
+            helpers = RenderHelpers(0)
+        self._helpers, self._t, self._backend = helpers, t, backend
+        self._features, self._cull, self._lod, self._lod_tol = features, cull, lod, lod_tol
+        self._workspace = workspace
+        self._hint = tuple(int(c) for c in capacity) if capacity is not None else None
+        self._resolved: list = []        # per view: (parts, camera, background, sky)
+        self._where: list = []           # per view: (ClaimedBatch, index in it), a RenderOutput, or None (deferred)
+        self._deferred: list = []        # gsplat: (view index, view) rendered together at close
+        self._batch: Any = None          # the open ClaimedBatch
+        self._staged = [0, 0, 0]         # views, Gaussians, pixels staged into batches so far
+        self._closed = False
+
+    # --------------------------------------------------------------- adding views
+    def add(self, view: View) -> int:
+        """Add a view ((source, camera[, background[, sky]]), as `render_batch` takes them) and
+        return its index; checked first (`ValueError`, with nothing added)."""
+        if self._closed:
+            raise ValueError("Expected an open batch to add a view to, found it closed")
+        i = len(self._resolved)
+        self._add_resolved(view, _resolve_view(i, view, self._t))
+        return i
+
+    def _add_resolved(self, view: View, resolved: tuple) -> None:
+        parts, cam, bg, sky = resolved
+        i = len(self._resolved)
+        check_render_size(i + 1, cam.width, cam.height)
+        if self._features and Gaussians.concat(parts).feature_dim == 0:
+            raise ValueError(f"Expected Gaussians with features for features=True, found none in view {i}")
+        if self._backend == "torch" or any(p.is_torch for p in parts):
+            where: Any = render(parts, cam, backend=self._backend, background=bg, features=self._features)
+        elif self._backend == "gsplat":
+            where = None
+            self._deferred.append((i, view))
+        else:
+            if self._lod:
+                from .lod import lod_parts
+
+                parts = lod_parts(parts, cam.world_to_camera, cam.K, cam.near, self._lod_tol)
+            where = self._stage(_batch_views([(parts, cam, np.zeros(3) if sky is not None else bg)])[0])
+        self._resolved.append(resolved)
+        self._where.append(where)
+
+    def _stage(self, bv: Any) -> tuple:
+        """Stage a `BatchView` into the open batch (a new one when none is open or it is full)."""
+        if self._batch is not None and self._batch.add(bv):
+            return self._staged_into(bv, self._batch.num_views - 1)
+        if self._batch is not None:
+            self._batch.close()
+        from .cpu.claimed import ClaimedBatch
+        from .cpu.pipeline import Workspace
+
+        first = self._staged[0] == 0
+        dim = bv.features[0].shape[1] if self._features and bv.features else 0
+        batch = ClaimedBatch(features=self._features, cull=self._cull, capacity=self._capacity_for(bv), dim=dim,
+                             workspace=self._workspace if first and self._workspace is not None else Workspace())
+        if not batch.add(bv):
+            raise AssertionError("a batch sized for a view must hold it")
+        self._batch = batch
+        self._helpers.submit(batch)
+        self._helpers.handover(batch)        # a helper renders this view while the caller prepares the next
+        return self._staged_into(bv, 0)
+
+    def _staged_into(self, bv: Any, k: int) -> tuple:
+        self._staged[0] += 1
+        self._staged[1] += bv.size
+        self._staged[2] += bv.width * bv.height
+        return (self._batch, k)
+
+    def _capacity_for(self, bv: Any) -> tuple[int, int, int]:
+        """A new batch's capacity: what the hint leaves after the views staged so far, and at
+        least this view, or (past the hint) the rest at the average view's size, with room to spare."""
+        v0, n0, p0 = self._staged
+        hv, hn, hp = self._hint if self._hint is not None else (0, 0, 0)
+        left = max(hv - v0, 1)
+        n, px = bv.size, bv.width * bv.height
+        mean_n = (n0 + n) / (v0 + 1)
+        return (left, max(n, hn - n0, int(1.25 * mean_n * left) + 1), max(px, hp - p0, px * left))
+
+    @property
+    def staged(self) -> tuple[int, int, int]:
+        """(views, Gaussians, pixels) staged for the compiled CPU renderer so far."""
+        return tuple(self._staged)
+
+    def close(self) -> None:
+        """No more views: the helpers finish the staged ones (views for gsplat render now)."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._batch is not None:
+            self._batch.close()
+        if self._deferred:
+            outs = render_batch([v for _, v in self._deferred], self._t, backend=self._backend,
+                                features=self._features, cull=self._cull, lod=self._lod, lod_tol=self._lod_tol)
+            for (i, _), out in zip(self._deferred, outs):
+                self._where[i] = out
+
+    def cancel(self) -> None:
+        """Close the batch and wait until no thread is rendering into its buffers (after an error
+        part way through adding views: the workspace can then be reused)."""
+        self.close()
+        for batch in {id(w[0]): w[0] for w in self._where if isinstance(w, tuple)}.values():
+            self._helpers.complete(batch)
+
+    # --------------------------------------------------------------- outputs
     def result(self) -> list[RenderOutput]:
-        """Render what the helpers have not claimed on this thread, wait for the rest, and return
-        one `RenderOutput` per view (as `render_batch`)."""
-        if self._outs is None:
-            self._outs = _batch_outputs(self._helpers.complete(self._batch), self._resolved)
-            self._batch = None
-        return self._outs
+        """Close, render what the helpers have not claimed on this thread, wait for the rest, and
+        return one `RenderOutput` per view (as `render_batch`)."""
+        self.close()
+        return self.partial(0, len(self._where))
 
     def partial(self, lo: int, hi: int, timeout_s: float = 600.0) -> list[RenderOutput]:
-        """The outputs of views lo..hi - 1 as soon as they are rendered (this thread renders
-        views nobody has claimed meanwhile), so the caller can use the first views while the
-        helpers render the rest (`TimeoutError` after `timeout_s` seconds of waiting)."""
-        if self._outs is not None:
-            return self._outs[lo:hi]
-        return _batch_outputs(self._helpers.partial(self._batch, lo, hi, timeout_s), self._resolved[lo:hi])
+        """The outputs of views lo..hi - 1 of the closed batch as soon as they are rendered (this
+        thread renders views nobody has claimed meanwhile), so the caller can use the first views
+        while the helpers render the rest (`TimeoutError` after `timeout_s` seconds of waiting)."""
+        if not self._closed:
+            raise RuntimeError("Expected a closed batch before its outputs, found it open (close() it first)")
+        out: list = []
+        i = lo
+        while i < hi:
+            where = self._where[i]
+            if not isinstance(where, tuple):
+                out.append(where)
+                i += 1
+                continue
+            batch, k = where
+            j = i + 1
+            while j < hi and isinstance(self._where[j], tuple) and self._where[j][0] is batch:
+                j += 1
+            dicts = self._helpers.partial(batch, k, k + (j - i), timeout_s)
+            out.extend(_batch_outputs(dicts, self._resolved[i:j]))
+            i = j
+        return out
+
+    def __del__(self) -> None:
+        batch = getattr(self, "_batch", None)
+        if batch is not None:
+            batch.close()                     # a helper waiting for more views returns
+
+
+def open_batch(t: float = 0.0, *, helpers: Any = None, backend: str = "cpu", features: bool = False,
+               cull: bool = False, lod: bool = False, lod_tol: float = 1.0, workspace: Any = None,
+               capacity: Optional[tuple[int, int, int]] = None) -> PendingRender:
+    """An open batched render: `add` views one at a time, `close` it, then take `result()` (or
+    `partial(lo, hi)`), which equals `render_batch(views, t, ...)` (bit-identical on "cpu").
+
+    On "cpu" with numpy Gaussians each view is staged and published as it is added, and a
+    helper thread of `helpers` (a `cpu.claimed.RenderHelpers`; None: none, this thread renders
+    at `result`) starts on it at once and renders it without the GIL while the caller prepares
+    the next view; torch views render as they are added, gsplat views at `close`.
+
+    Args:
+        t, backend, features, cull, lod, lod_tol: as for `render_batch`.
+        helpers: the threads that render beside the caller.
+        workspace: a `cpu.pipeline.Workspace` holding the staged inputs until the outputs are
+            taken (reuse one from batch to batch, one per batch in flight); None: fresh arrays.
+        capacity: (views, Gaussians, pixels) expected, so that one set of buffers holds them all
+            (more is fine: a full batch is closed and another one takes the next views).
+
+    Examples:
+        >>> pending = open_batch(helpers=RenderHelpers(1), capacity=(2, 8000, 2 * 84 * 84))  # doctest: +SKIP
+        >>> for view in [(g_a, cam_a), (g_b, cam_b)]:  # doctest: +SKIP
+        ...     pending.add(view)
+        >>> pending.close(); outs = pending.result()  # doctest: +SKIP
+    """
+    return PendingRender(helpers, t, backend=backend, features=features, cull=cull, lod=lod, lod_tol=lod_tol,
+                         workspace=workspace, capacity=capacity)
 
 
 def submit_batch(views: Sequence[View], t: float = 0.0, *, helpers: Any, backend: str = "cpu",
                  features: bool = False, cull: bool = False, lod: bool = False,
                  lod_tol: float = 1.0, workspace: Any = None) -> PendingRender:
     """Start `render_batch(views, t, ...)` on `helpers` (a `cpu.claimed.RenderHelpers`) and return
-    at once; `.result()` of the returned `PendingRender` joins in on the calling thread and gives
-    the outputs (bit-identical to `render_batch`'s).
-
-    On "cpu" with numpy Gaussians the helper threads claim whole views and render them without
-    the GIL, so the caller's own Python work runs beside them; other backends (and torch
-    Gaussians) render here, before this returns. `workspace` (a `cpu.pipeline.Workspace`, or
-    None for fresh arrays) holds the staged inputs until `result()` returns: reuse one from
-    batch to batch, one per batch in flight. Other arguments as for `render_batch`.
+    at once, closed; `.result()` of the returned `PendingRender` joins in on the calling thread
+    and gives the outputs (bit-identical to `render_batch`'s). Every view is checked before any
+    is staged. Arguments as for `render_batch` and `open_batch`.
 
     Examples:
         >>> helpers = RenderHelpers(1)  # doctest: +SKIP
         >>> pending = submit_batch([(g_a, cam_a), (g_b, cam_b)], helpers=helpers)  # doctest: +SKIP
         >>> outs = pending.result()  # doctest: +SKIP
     """
-    staged = _stage_batch(views, t, backend, features, lod, lod_tol)
-    if isinstance(staged, list):
-        return PendingRender(outs=staged)
-    resolved, flat = staged
-    if backend == "gsplat":
-        return PendingRender(outs=render_batch(views, t, backend=backend, features=features, cull=cull, lod=lod,
-                                               lod_tol=lod_tol))
-    from .cpu.claimed import ClaimedBatch
-
-    batch = ClaimedBatch(_batch_views(flat), features=features, cull=cull, workspace=workspace)
-    return PendingRender(helpers, helpers.submit(batch), resolved)
+    resolved = [_resolve_view(i, view, t) for i, view in enumerate(views)]
+    capacity = (len(views), sum(len(p) for parts, _, _, _ in resolved for p in parts),
+                sum(cam.width * cam.height for _, cam, _, _ in resolved))
+    pending = open_batch(t, helpers=helpers, backend=backend, features=features, cull=cull, lod=lod,
+                         lod_tol=lod_tol, workspace=workspace, capacity=capacity)
+    try:
+        for view, res in zip(views, resolved):
+            pending._add_resolved(view, res)
+    except BaseException:
+        pending.cancel()
+        raise
+    pending.close()
+    return pending
 
 
 def _stage_batch(views: Sequence[View], t: float, backend: str, features: bool, lod: bool,

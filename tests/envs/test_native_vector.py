@@ -106,6 +106,14 @@ def test_make_vec_vector_mode_and_errors():
         MorphoSimVectorEnv(1, kind="swim")
     with pytest.raises(ValueError, match="actions for 2 envs"):
         venv.step(np.zeros((3, 3), np.float32))
+    # a bad action of one env is refused before any env moves
+    steps = [env._step_count for env in venv.envs]
+    times = [env.world.t for env in venv.envs]
+    with pytest.raises(ValueError, match=r"env 1: .*NaN.*no env was stepped"):
+        venv.step(np.array([[0.5, 0, 0], [0, np.nan, 0]], np.float32))
+    assert [env._step_count for env in venv.envs] == steps and [env.world.t for env in venv.envs] == times
+    venv.step(np.zeros((2, 3), np.float32))                   # and the batch steps on
+    assert [env._step_count for env in venv.envs] == [k + 1 for k in steps]
     with pytest.raises(ValueError, match="env index"):
         venv.perturb(5, "make the ball blue")
     with pytest.raises(ValueError, match="seeds"):
@@ -284,6 +292,21 @@ def test_the_vector_info_batching_equals_gymnasiums():
         ours = fast._add_info(ours, info, i)
         theirs = plain._add_info(theirs, info, i)
     assert _deep_equal(ours, theirs)
+    # the step's key-by-key batching (`_batch_infos`) gives the same, in any env order; with
+    # values of mixed types in a key (int and float "t", np.int64 and int "step") and arrays
+    order = [2, 0, 1]
+    theirs = {}
+    for i in order:
+        theirs = plain._add_info(theirs, infos[i], i)
+    assert _deep_equal(fast._batch_infos([(i, infos[i]) for i in order]), theirs)
+    same_type = [{"t": 0.5 * i, "pos": np.arange(3.0) + i, "ok": bool(i % 2), "k": np.float32(i)} for i in range(3)]
+    theirs = {}
+    for i in order:
+        theirs = plain._add_info(theirs, same_type[i], i)
+    assert _deep_equal(fast._batch_infos([(i, same_type[i]) for i in order]), theirs)
+    mixed = [{"x": {"a": 1}}, {"x": 2}]                       # a dict, then not: env by env
+    assert _deep_equal(fast._batch_infos(list(enumerate(mixed))), fast._add_info(fast._add_info({}, mixed[0], 0),
+                                                                                   mixed[1], 1))
 
 
 def test_autoresets_join_the_batched_render(monkeypatch):

@@ -2,12 +2,13 @@
 `render_batch` and `render` whichever thread renders which view."""
 
 import threading
+import time
 
 import numpy as np
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.render.api import render_batch, submit_batch
+from morphosim_gym.render.api import open_batch, render_batch, submit_batch
 from morphosim_gym.render.cpu.batch import batch_view
 from morphosim_gym.render.cpu.claimed import ClaimedBatch, RenderHelpers
 from tests.render.test_batched import _SPECS, _assert_same, _views
@@ -95,3 +96,115 @@ def test_partial_outputs_come_view_range_by_range_and_match(helpers):
     assert len(batch.outputs(0, 2)) == 2
     with pytest.raises(RuntimeError, match="every view rendered"):
         batch.outputs(0, 3)
+
+
+def _wait(cond, seconds: float = 60.0) -> bool:
+    deadline = time.monotonic() + seconds
+    while not cond():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.001)
+    return True
+
+
+def test_an_open_batch_renders_each_view_as_it_is_added():
+    # the vector env adds env i's view right after advancing env i: a helper renders it while the
+    # batch is still open (before the next view is even added), and the outputs are render_batch's
+    views = _views(_SPECS[:3])
+    ref = render_batch(views)
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=(3, 10_000, 3 * 100 * 100))
+        pending.add(views[0])
+        batch = pending._where[0][0]
+        assert _wait(lambda: batch.views_done(0, 1)) and not batch.closed
+        pending.add(views[1])
+        pending.add(views[2])
+        with pytest.raises(RuntimeError, match="closed batch"):
+            pending.partial(0, 1)
+        pending.close()
+        got = pending.result()
+    finally:
+        pool.close()
+    for a, b in zip(got, ref):
+        _assert_same(a, b)
+
+
+@pytest.mark.parametrize("capacity", [None, (1, 10, 10), (2, 100, 100)])
+def test_views_past_the_capacity_go_to_further_batches_and_match(capacity):
+    views = _views(_SPECS)
+    ref = render_batch(views)
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=capacity)
+        for view in views:
+            pending.add(view)
+        pending.close()
+        got = pending.partial(0, 2, 30) + pending.partial(2, len(views), 30)
+        batches = {id(w[0]) for w in pending._where}
+    finally:
+        pool.close()
+    assert len(batches) > 1
+    assert pending.staged == (len(views), sum(len(g.means) for g, _, _ in views),
+                              sum(c.width * c.height for _, c, _ in views))
+    for a, b in zip(got, ref):
+        _assert_same(a, b)
+
+
+def test_a_bad_view_is_refused_and_leaves_the_open_batch_usable():
+    views = _views(_SPECS[:2])
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=(2, 10_000, 2 * 84 * 84))
+        pending.add(views[0])
+        with pytest.raises(ValueError, match="Camera"):
+            pending.add((views[1][0], "not a camera"))
+        with pytest.raises(ValueError, match="background"):
+            pending.add((views[1][0], views[1][1], (2.0, 0.0, 0.0)))
+        pending.add(views[1])
+        got = pending.result()                      # result() closes the batch
+        with pytest.raises(ValueError, match="open batch"):
+            pending.add(views[0])
+    finally:
+        pool.close()
+    assert len(got) == 2
+    for a, b in zip(got, render_batch(views)):
+        _assert_same(a, b)
+
+
+def test_cancel_leaves_no_helper_on_the_batch():
+    views = _views(_SPECS[:4])
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=(4, 20_000, 4 * 100 * 100))
+        pending.add(views[0])
+        pending.add(views[3])
+        pending.cancel()
+        batch = pending._where[0][0]
+        assert batch.finished and batch._done.is_set()
+    finally:
+        pool.close()
+
+
+def test_an_open_batch_is_not_rendered_on_the_calling_thread():
+    # the calling thread may only join in on a closed batch: on an open one it could wait for a view
+    # that only it would add
+    views = _views(_SPECS[:1])
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    batch = ClaimedBatch(capacity=(2, 10_000, 2 * 84 * 84))
+    assert batch.add(bvs[0]) and not batch.add(batch_view([views[0][0]] * 5, views[0][1].world_to_camera,
+                                                          views[0][1].K, 0.01, 84, 84))
+    pool = RenderHelpers(0)
+    with pytest.raises(RuntimeError, match="open"):
+        pool.partial(batch, 0, 1)
+    with pytest.raises(RuntimeError, match="open"):
+        pool.complete(batch)
+    batch.close()
+    out = pool.complete(batch)
+    assert len(out) == 1 and np.array_equal(out[0]["rgb"], _rendered(bvs)[0]["rgb"])
+
+
+def _rendered(bvs):
+    b = ClaimedBatch(bvs)
+    b.work()
+    return b.outputs()

@@ -3,10 +3,12 @@ claims whole views of the batch (in view order) and renders each one start to fi
 binning, raster) in one compiled call that holds no GIL.
 
 This is the batch path for callers that have Python work of their own beside the render (the
-vector env: rig, rewards, observations of other envs). A `RenderHelpers` thread works on a batch
-while the calling thread does that work, and the caller joins in (`RenderHelpers.complete`) when
-it is done: both cores render, without a numba parallel region whose join waits for a thread
-the caller's Python work keeps busy, and with projection and binning parallel too (as whole views).
+vector env: rig, rewards, observations of other envs). A batch is a stream: the caller `add`s
+views one at a time (each is staged and published at once) and `close`s it after the last; a
+`RenderHelpers` thread starts on the first view while the caller prepares the next ones, and
+the caller joins in (`RenderHelpers.complete` / `partial`) when its own work is done. Both cores
+render, without a numba parallel region whose join waits for a thread the caller's Python work
+keeps busy, and with projection and binning parallel too (as whole views).
 
 Pixels are bit-identical to `batch.rasterize_batch_numpy` and to the single-camera path: a view
 runs the same per-range kernels (`_project_range`, `_fill_range`, `plan_tiles`, `_raster_tiles`)
@@ -23,16 +25,21 @@ from typing import Optional, Sequence
 import numpy as np
 
 from ._jit import NREC, atomic_add, jit
-from .batch import _MAX_TILE_LIST, BatchView, Staged, stage_views, view_outputs
-from .pipeline import Workspace
+from .batch import _MAX_TILE_LIST, BatchView, Staged, view_outputs
 from .binning import _fill_range, bin_offsets, plan_tiles
+from .cull import cull_view
 from .forward import _raster_tiles
+from .pipeline import Workspace
 from .projection import _project_range
 
 __all__ = ["ClaimedBatch", "RenderHelpers"]
 
 _POLL_S = 50e-6           # sleep between looks at a helper's view that is still rendering
 _WAIT_S = 600.0            # a helper that takes longer over its last view is hung: raise instead of waiting
+_HANDOVER_SPINS = 200_000  # ~1-5 ms of looking for a helper to start on a batch (`RenderHelpers.handover`)
+
+# the batch's shared counters (int64, changed only atomically once a thread may be working)
+_NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED = range(5)
 
 
 @jit
@@ -86,102 +93,220 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
 
 
 @jit
-def _work(state,          # [2] int64: next view to claim, views finished
+def _work(state,          # [5] int64: next view to claim, views finished, views published, closed, threads entered
           limit,          # most views this call renders (< 0: no limit)
           vdone,          # [V] int64: 1 once view v is rendered
           longest,        # [V] int64 out: each view's longest tile list
           ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats, Ks, sizes, nears, bgs,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
-    """Claim views one at a time (in view order) until none is left or `limit` are rendered;
-    returns how many this call rendered."""
-    V = vdone.shape[0]
+    """Claim views one at a time (in view order) and render each once it is published, until the
+    batch is closed with no view left or `limit` are rendered; returns how many this call rendered.
+    A claimed view that is not published yet is waited for (spinning, without the GIL)."""
+    atomic_add(state, 4, 1)                 # _ENTERED: a thread is at work (see `RenderHelpers.handover`)
     done = 0
     while limit < 0 or done < limit:
-        v = atomic_add(state, 0, 1)
-        if v >= V:
-            break
+        v = atomic_add(state, 0, 1)         # _NEXT
+        while v >= atomic_add(state, 2, 0):            # not published (yet)
+            if atomic_add(state, 3, 0) != 0 and v >= atomic_add(state, 2, 0):
+                return done                            # closed without it: nothing left to claim
         longest[v] = _render_view(v, ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats,
                                   Ks, sizes, nears, bgs, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out,
                                   dummy_f, dummy_i)
         atomic_add(vdone, v, 1)            # seq_cst: the view's pixels are written before its flag
-        atomic_add(state, 1, 1)
+        atomic_add(state, 1, 1)            # _FINISHED
         done += 1
     return done
 
 
+@jit
+def _bump(state, k):
+    """state[k] += 1 atomically (publish a view, close the batch)."""
+    atomic_add(state, k, 1)
+
+
+@jit
+def _wait_entered(state, spins):
+    """Spin (without the GIL) until a thread has entered `_work` on this batch, at most `spins`
+    looks; whether one has."""
+    for _ in range(spins):
+        if atomic_add(state, 4, 0) > 0:
+            return True
+    return False
+
+
 class ClaimedBatch:
-    """A batch of `BatchView`s staged for `work` by any number of threads at once.
+    """A batch of views rendered by any number of threads at once, staged view by view.
 
     Args:
-        views: the views (as `batch.rasterize_batch_numpy` takes them).
-        features: also render the feature channels (one D in every view).
+        views: `BatchView`s to stage at once; the batch is then closed (its capacity is theirs).
+            Leave it None to `add` views one at a time and `close` the batch after the last.
+        features: also render the feature channels (`dim` of them, one D in every view).
         cull: drop runs of Gaussians outside a view's frustum first (`cull.cull_view`).
         workspace: scratch buffers to stage the batch in (reused from batch to batch: fresh
             megabytes cost page faults on every step); None: fresh arrays. Two batches in
             flight at once need two workspaces.
+        capacity: (views, Gaussians, pixels) the batch can hold when `views` is None; `add`
+            returns False for a view that does not fit (start another batch for it).
+        dim: the feature dimension D with `features` when `views` is None.
 
-    Call `work()` from each thread that should render (it returns once no view is left to
-    claim; a view another thread claimed may still be rendering), then `outputs()` once every
-    view is finished (`finished`), or `outputs(lo, hi)` once views lo..hi - 1 are
-    (`views_done`). Views are claimed in view order, so the first ones finish first.
+    Call `work()` from each thread that should render (it renders published views, waits for
+    views still to come, and returns once the batch is closed and no view is left to claim; a
+    view another thread claimed may still be rendering), then `outputs()` once every view is
+    finished (`finished`), or `outputs(lo, hi)` once views lo..hi - 1 are (`views_done`).
+    Views are claimed in view order, so the first ones finish first.
     """
 
-    def __init__(self, views: Sequence[BatchView], features: bool = False, cull: bool = False,
-                 workspace: Optional[Workspace] = None) -> None:
-        s: Staged = stage_views(views, features, cull, workspace)
-        self._s = s
-        V = s.V
-        n = s.means.shape[0]
+    def __init__(self, views: Optional[Sequence[BatchView]] = None, features: bool = False, cull: bool = False,
+                 workspace: Optional[Workspace] = None, capacity: Optional[tuple[int, int, int]] = None,
+                 dim: int = 0) -> None:
+        if views is not None:
+            views = list(views)
+            dims = {-1 if v.features is None else (v.features[0].shape[1] if v.features else 0) for v in views}
+            if features and (len(dims) > 1 or -1 in dims):
+                raise ValueError(f"Expected features of one dimension D in every view, found {sorted(dims)}")
+            dim = dims.pop() if features and dims else 0
+            capacity = (len(views), sum(v.size for v in views), sum(v.width * v.height for v in views))
+        elif capacity is None:
+            raise ValueError("Expected views, or a capacity (views, Gaussians, pixels) for a batch staged view by view")
+        V, N, P = (max(int(c), 0) for c in capacity)
+        D = int(dim) if features else 0
         ws = workspace if workspace is not None else Workspace()
-        self._rec = ws.get("rec", (n, NREC), np.float32)
-        self._trect = ws.get("trect", (4, n), np.int32)
-        P = int(s.pix_off[-1])
-        D = s.feat.shape[1]
-        self._rgb = np.empty(3 * P, np.float32)
-        self._depth = np.empty(P, np.float32)
-        self._alpha = np.empty(P, np.float32)
+        f32, i64 = np.float32, np.int64
+        self._cull, self._features = bool(cull), bool(features)
+        self._cap = (V, N, P)
+        self._n = self._p = self._r = 0            # Gaussians, pixels and ranges used
+        self._means = ws.get("in_means", (N, 3), f32)
+        self._quats = ws.get("in_quats", (N, 4), f32)
+        self._scales = ws.get("in_scales", (N, 3), f32)
+        self._opac = ws.get("in_opacities", (N,), f32)
+        self._colors = ws.get("in_colors", (N, 3), f32)
+        self._ids = ws.get("in_ids", (N,), np.int32)
+        self._feat = ws.get("in_features", (N, D), f32)
+        self._ranges = ws.get("ranges", (N + V if cull else V, 2), i64)
+        self._rstart = np.zeros(V + 1, i64)
+        self._pix_off = np.zeros(V + 1, i64)
+        self._viewmats = np.zeros((V, 4, 4), f32)
+        self._Ks = np.zeros((V, 3, 3), f32)
+        self._sizes = np.zeros((V, 3), i64)
+        self._nears = np.zeros(V, f32)
+        self._bgs = np.zeros((V, 3), f32)
+        self._rec = ws.get("rec", (N, NREC), f32)
+        self._trect = ws.get("trect", (4, N), np.int32)
+        self._rgb = np.empty(3 * P, f32)
+        self._depth = np.empty(P, f32)
+        self._alpha = np.empty(P, f32)
         self._inst = np.empty(P, np.int32)
-        self._fout = np.empty(D * P, np.float32)
-        self._state = np.zeros(2, np.int64)
-        self._vdone = np.zeros(V, np.int64)
-        self._longest = np.zeros(V, np.int64)
+        self._fout = np.empty(D * P, f32)
+        self._state = np.zeros(5, i64)
+        self._vdone = np.zeros(V, i64)
+        self._longest = np.zeros(V, i64)
         self.error: Optional[BaseException] = None
+        if views is not None:
+            for v in views:
+                self.add(v)
+            self.close()
+
+    # --------------------------------------------------------------- staging
+    def add(self, view: BatchView) -> bool:
+        """Stage `view` after the published ones and publish it (a thread waiting in `work` starts
+        on it at once); False, with nothing changed, when it does not fit in the capacity.
+        `ValueError` on a closed batch or a view whose features do not match."""
+        if self.closed:
+            raise ValueError("Expected an open batch to add a view to, found it closed")
+        D = self._feat.shape[1]
+        if self._features and (view.features is None or any(f.shape[1] != D for f in view.features)):
+            raise ValueError(f"Expected features of dimension {D} in every view, found "
+                             f"{None if view.features is None else [f.shape[1] for f in view.features]}")
+        v, n0, p0, r0 = self.num_views, self._n, self._p, self._r
+        n, npx = view.size, view.width * view.height
+        V, N, P = self._cap
+        if v >= V or n0 + n > N or p0 + npx > P:
+            return False
+        n1 = n0 + n
+        fields = [(self._means, view.means), (self._quats, view.quats), (self._scales, view.scales),
+                  (self._opac, view.opacities), (self._colors, view.colors), (self._ids, view.ids)]
+        if self._features:
+            fields.append((self._feat, view.features))
+        for buf, parts in fields:
+            if len(parts) == 1:
+                buf[n0:n1] = parts[0]
+            elif parts:
+                np.concatenate(parts, out=buf[n0:n1], casting="same_kind")
+        self._viewmats[v] = view.viewmat
+        self._Ks[v] = view.K
+        self._sizes[v] = (view.width, view.height, (view.width + 15) // 16)
+        self._nears[v] = view.near
+        self._bgs[v] = view.background
+        if self._cull and n:
+            k = cull_view(self._means, self._scales, self._opac, self._ids, n0, n1,
+                          self._viewmats[v].astype(np.float64), self._Ks[v].astype(np.float64),
+                          int(view.width), int(view.height), float(self._nears[v]), self._ranges[r0:])
+        elif n:
+            self._ranges[r0] = (n0, n1)
+            k = 1
+        else:
+            k = 0
+        self._n, self._p, self._r = n1, p0 + npx, r0 + k
+        self._rstart[v + 1] = r0 + k
+        self._pix_off[v + 1] = p0 + npx
+        _bump(self._state, _PUBLISHED)       # seq_cst: everything above is visible before the view is
+        return True
+
+    def close(self) -> None:
+        """No more views: `work` returns once the published ones are claimed (idempotent)."""
+        if not self.closed:
+            _bump(self._state, _CLOSED)
 
     @property
+    def closed(self) -> bool:
+        return int(self._state[_CLOSED]) != 0
+
+    @property
+    def size(self) -> tuple[int, int, int]:
+        """(views, Gaussians, pixels) staged so far."""
+        return self.num_views, self._n, self._p
+
+    # --------------------------------------------------------------- rendering
+    @property
     def num_views(self) -> int:
-        return self._s.V
+        return int(self._state[_PUBLISHED])
 
     @property
     def finished(self) -> bool:
-        """Whether every view has been rendered."""
-        return int(self._state[1]) >= self._s.V
+        """Whether the batch is closed and every view has been rendered."""
+        return self.closed and int(self._state[_FINISHED]) >= self.num_views
 
     @property
     def claimable(self) -> bool:
-        """Whether a view is left for a `work` call to claim."""
-        return int(self._state[0]) < self._s.V
+        """Whether a published view is left for a `work` call to claim."""
+        return int(self._state[_NEXT]) < self.num_views
+
+    @property
+    def entered(self) -> bool:
+        """Whether a thread has started `work` on this batch."""
+        return int(self._state[_ENTERED]) > 0
 
     def views_done(self, lo: int, hi: int) -> bool:
         """Whether views lo..hi - 1 have been rendered."""
-        return bool(self._vdone[lo:hi].all())
+        return hi <= self.num_views and bool(self._vdone[lo:hi].all())
 
     def work(self, limit: int = -1) -> int:
-        """Render views of this batch until none is left to claim, or `limit` of them (holds no
-        GIL while rendering); returns how many this call rendered."""
-        s = self._s
-        if s.V == 0:
+        """Render views of this batch (waiting, without the GIL, for views not published yet) until
+        it is closed and none is left to claim, or `limit` of them; returns how many this call
+        rendered."""
+        if self._cap[0] == 0:
             return 0
-        return int(_work(self._state, int(limit), self._vdone, self._longest, s.ranges, s.rstart, s.means, s.quats, s.scales,
-                         s.opac, s.colors, s.feat, s.ids, s.viewmats, s.Ks, s.sizes, s.nears, s.bgs, s.pix_off,
-                         self._rec, self._trect, self._rgb, self._depth, self._alpha, self._inst, self._fout,
+        return int(_work(self._state, int(limit), self._vdone, self._longest, self._ranges, self._rstart, self._means,
+                         self._quats, self._scales, self._opac, self._colors, self._feat, self._ids, self._viewmats,
+                         self._Ks, self._sizes, self._nears, self._bgs, self._pix_off, self._rec, self._trect,
+                         self._rgb, self._depth, self._alpha, self._inst, self._fout,
                          np.empty((1, 1), np.float32), np.empty((1, 1), np.int32)))
 
     def outputs(self, lo: int = 0, hi: Optional[int] = None) -> list[dict]:
         """One dict per view lo..hi - 1 (default all), as `batch.rasterize_batch_numpy` returns them."""
         if self.error is not None:
             raise self.error
-        s = self._s
-        hi = s.V if hi is None else hi
+        hi = self.num_views if hi is None else hi
         if not self.views_done(lo, hi):
             raise RuntimeError(f"Expected every view rendered before outputs(), found {int(self._vdone[lo:hi].sum())} "
                                f"of {hi - lo}")
@@ -189,7 +314,9 @@ class ClaimedBatch:
         if worst >= _MAX_TILE_LIST:
             raise ValueError(f"Expected at most {_MAX_TILE_LIST - 1} Gaussians over one 16x16 tile in float32, "
                              f"found {worst} (list positions are kept as floats)")
-        return view_outputs(s, self._rgb, self._depth, self._alpha, self._inst, self._fout, lo, hi)
+        staged = Staged(V=self.num_views, sizes=self._sizes, pix_off=self._pix_off, feat=self._feat,
+                        features=self._features)
+        return view_outputs(staged, self._rgb, self._depth, self._alpha, self._inst, self._fout, lo, hi)
 
 
 class RenderHelpers:
@@ -212,6 +339,7 @@ class RenderHelpers:
         self._threads: list[threading.Thread] = []
         self._lock = threading.Lock()            # starting and stopping threads
         self._count = threading.Lock()           # batches' count of helpers still at work
+        self._inflight = 0                       # batches submitted that some helper is still on
 
     def submit(self, batch: ClaimedBatch) -> ClaimedBatch:
         """Start the helpers on `batch` (no-op without helpers); returns it."""
@@ -220,12 +348,28 @@ class RenderHelpers:
         self._start()
         batch._left = self.helpers                       # helpers still to finish their part
         batch._done = threading.Event()
+        with self._count:
+            self._inflight += 1
         for q in self._queues:
             q.put(batch)
         return batch
 
+    def handover(self, batch: ClaimedBatch, spins: int = _HANDOVER_SPINS) -> bool:
+        """Let a helper start on `batch` now: wait, without the GIL, until a thread has entered its
+        `work` (at most `spins` looks, ~1-5 ms). A helper woken while this thread runs Python waits
+        for the GIL, up to Python's switch interval (5 ms); call this right after `submit` and the
+        first `add`, before more Python work. Whether a thread has entered (True without helpers:
+        nothing to wait for; False at once while the helpers are still on an earlier batch)."""
+        if self.helpers == 0 or batch.entered:
+            return True
+        if self._inflight > 1:
+            return False                         # the helpers are on an earlier batch: no waiting for them
+        return bool(_wait_entered(batch._state, int(spins)))
+
     def complete(self, batch: ClaimedBatch, timeout_s: float = _WAIT_S) -> list[dict]:
-        """Render the views no helper has claimed, wait for the rest and return the outputs."""
+        """Render the views no helper has claimed, wait for the rest and return the outputs (of a
+        closed batch: on an open one this thread could wait for a view only it would add)."""
+        _check_closed(batch)
         batch.work()
         done = getattr(batch, "_done", None)
         if done is not None and not done.wait(timeout_s):
@@ -236,6 +380,7 @@ class RenderHelpers:
         """The outputs of views lo..hi - 1 once they are rendered: until then this thread renders
         views no helper has claimed, one at a time, or waits for the helpers' (so a caller can
         finish the work of the first views while the helpers render the last)."""
+        _check_closed(batch)
         deadline = None
         while not batch.views_done(lo, hi):
             if batch.error is not None:
@@ -283,6 +428,7 @@ class RenderHelpers:
                 with self._count:
                     batch._left -= 1
                     last = batch._left == 0
+                    self._inflight -= int(last)
                 if last:
                     batch._done.set()
 
@@ -291,3 +437,8 @@ class RenderHelpers:
 
     def __setstate__(self, state: dict) -> None:
         self.__init__(state["helpers"])
+
+
+def _check_closed(batch: ClaimedBatch) -> None:
+    if not batch.closed:
+        raise RuntimeError("Expected a closed batch to render on this thread, found it open (close() it first)")
