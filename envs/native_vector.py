@@ -222,6 +222,10 @@ class MorphoSimVectorEnv(VectorEnv):
         if len(acts) != n:
             raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
         shape = self.single_action_space.shape
+        if all(w is None for w in self._steppers):
+            batch = _checked_batch(actions, n, shape)
+            if batch is not None:
+                return list(batch)               # rows of one clipped float64 array
         out = []
         for i, a in enumerate(acts):
             if self._steppers[i] is not None:
@@ -519,6 +523,18 @@ def _info_array(value: Any, n: int) -> np.ndarray:
     if isinstance(value, np.ndarray):
         return np.zeros((n, *value.shape), dtype=value.dtype)
     return np.full(n, fill_value=None, dtype=object)
+
+
+def _checked_batch(actions: Any, n: int, shape: tuple) -> Optional[np.ndarray]:
+    """`check_action` of every row of a finite [n, *shape] numeric array at once (the same float64
+    values, clipped); None for anything else (then each env's action is checked on its own, and
+    the first bad one named)."""
+    if not isinstance(actions, np.ndarray) or actions.shape != (n, *shape) or actions.dtype.kind not in "fiu":
+        return None
+    a = np.asarray(actions, dtype=np.float64)
+    if not np.isfinite(a).all():
+        return None
+    return np.clip(a, -1.0, 1.0)
 
 
 def _info_column(column: list, n: int) -> np.ndarray:
