@@ -253,43 +253,48 @@ class PendingRender:
                 from .lod import lod_parts
 
                 parts = lod_parts(parts, cam.world_to_camera, cam.K, cam.near, self._lod_tol)
-            where = self._stage(_batch_views([(parts, cam, np.zeros(3) if sky is not None else bg)])[0])
+            where = self._stage(parts, cam, np.zeros(3) if sky is not None else bg)
         self._resolved.append(resolved)
         self._where.append(where)
 
-    def _stage(self, bv: Any) -> tuple:
-        """Stage a `BatchView` into the open batch (a new one when none is open or it is full)."""
-        if self._batch is not None and self._batch.add(bv):
-            return self._staged_into(bv, self._batch.num_views - 1)
+    def _stage(self, parts: list, cam: Camera, bg: np.ndarray) -> tuple:
+        """Stage a view's numpy Gaussian parts into the open batch (a new one when none is open or
+        it is full)."""
+        view = (cam.world_to_camera, cam.K, cam.near, cam.width, cam.height, bg)
+        if self._batch is not None and self._batch.add_parts(parts, *view):
+            return self._staged_into(parts, cam, self._batch.num_views - 1)
         if self._batch is not None:
             self._batch.close()
         from .cpu.claimed import ClaimedBatch
         from .cpu.pipeline import Workspace
 
         first = self._staged[0] == 0
-        dim = bv.features[0].shape[1] if self._features and bv.features else 0
-        batch = ClaimedBatch(features=self._features, cull=self._cull, capacity=self._capacity_for(bv), dim=dim,
+        dims = {0 if p.features is None else p.features.shape[1] for p in parts}
+        dim = max(dims) if self._features else 0
+        n = sum(len(p.means) for p in parts)
+        batch = ClaimedBatch(features=self._features, cull=self._cull, capacity=self._capacity_for(n, cam), dim=dim,
                              workspace=self._workspace if first and self._workspace is not None else Workspace())
-        if not batch.add(bv):
+        if not batch.add_parts(parts, *view):
             raise AssertionError("a batch sized for a view must hold it")
         self._batch = batch
         self._helpers.submit(batch)
         self._helpers.handover(batch)        # a helper renders this view while the caller prepares the next
-        return self._staged_into(bv, 0)
+        return self._staged_into(parts, cam, 0)
 
-    def _staged_into(self, bv: Any, k: int) -> tuple:
+    def _staged_into(self, parts: list, cam: Camera, k: int) -> tuple:
         self._staged[0] += 1
-        self._staged[1] += bv.size
-        self._staged[2] += bv.width * bv.height
+        self._staged[1] += sum(len(p.means) for p in parts)
+        self._staged[2] += cam.width * cam.height
         return (self._batch, k)
 
-    def _capacity_for(self, bv: Any) -> tuple[int, int, int]:
+    def _capacity_for(self, n: int, cam: Camera) -> tuple[int, int, int]:
         """A new batch's capacity: what the hint leaves after the views staged so far, and at
-        least this view, or (past the hint) the rest at the average view's size, with room to spare."""
+        least this view (`n` Gaussians), or (past the hint) the rest at the average view's size,
+        with room to spare."""
         v0, n0, p0 = self._staged
         hv, hn, hp = self._hint if self._hint is not None else (0, 0, 0)
         left = max(hv - v0, 1)
-        n, px = bv.size, bv.width * bv.height
+        px = cam.width * cam.height
         mean_n = (n0 + n) / (v0 + 1)
         return (left, max(n, hn - n0, int(1.25 * mean_n * left) + 1), max(px, hp - p0, px * left))
 

@@ -118,7 +118,8 @@ def test_an_open_batch_renders_each_view_as_it_is_added():
         pending.add(views[0])
         batch = pending._where[0][0]
         assert _wait(lambda: batch.views_done(0, 1)) and not batch.closed
-        pending.add(views[1])
+        pending.add(views[1])                      # the helper, asleep since view 0, wakes for it
+        assert _wait(lambda: batch.views_done(0, 2)) and not batch.closed
         pending.add(views[2])
         with pytest.raises(RuntimeError, match="closed batch"):
             pending.partial(0, 1)
@@ -208,3 +209,36 @@ def _rendered(bvs):
     b = ClaimedBatch(bvs)
     b.work()
     return b.outputs()
+
+
+def test_views_of_several_parts_stream_as_render_composites_them():
+    # a scene plus an agent: parts composited in order, ids -1 over a part that has none
+    views = _views(_SPECS[:3])
+    g0, g1 = views[0][0], views[1][0]
+    bare = ms.Gaussians(means=g1.means, quats=g1.quats, scales=g1.scales, opacities=g1.opacities, colors=g1.colors)
+    assert g0.object_ids is not None and bare.object_ids is None
+    parts_views = [([g0, bare], views[2][1], views[2][2]), ([bare, g0, bare], views[0][1], views[0][2])]
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=(1, 10, 10))        # the second view opens a second batch
+        for view in parts_views:
+            pending.add(view)
+        got = pending.result()
+    finally:
+        pool.close()
+    for (parts, cam, bg), out in zip(parts_views, got):
+        _assert_same(out, ms.render(parts, cam, background=bg))
+
+
+def test_closing_the_helpers_does_not_wait_for_an_open_batch():
+    # a helper asleep on a batch nobody closed (a caller that raised mid-step) must still stop
+    views = _views(_SPECS[:1])
+    pool = RenderHelpers(1)
+    pending = open_batch(helpers=pool, capacity=(3, 10_000, 3 * 100 * 100))
+    pending.add(views[0])
+    batch = pending._where[0][0]
+    assert _wait(lambda: batch.views_done(0, 1)) and not batch.closed
+    closer = threading.Thread(target=pool.close, daemon=True)
+    closer.start()
+    closer.join(30.0)
+    assert not closer.is_alive() and batch.closed

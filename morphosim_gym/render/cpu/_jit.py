@@ -33,7 +33,7 @@ FOV_CLAMP = 1.3
 EXTENT_MARGIN = 0.05
 
 __all__ = [
-    "jit", "pjit", "splat_exp", "splat_log", "float_bits", "atomic_add",
+    "jit", "pjit", "splat_exp", "splat_log", "float_bits", "atomic_add", "atomic_cas",
     "TILE", "ALPHA_MIN", "ALPHA_MAX", "T_MIN", "BLUR", "FOV_CLAMP", "EXTENT_MARGIN", "NREC",
     "R_MX", "R_MY", "R_CA", "R_CB", "R_CC", "R_OP", "R_Z", "R_R", "R_G", "R_B", "R_EX", "R_EY",
     "R_X0", "R_X1", "R_Y0", "R_Y1",
@@ -115,6 +115,24 @@ def atomic_add(typingctx, arr, idx, val):
         ary = context.make_array(arrty)(context, builder, args[0])
         ptr = cgutils.get_item_pointer(context, builder, arrty, ary, [args[1]])
         return builder.atomic_rmw("add", ptr, args[2], "seq_cst")
+
+    return sig, codegen
+
+
+@intrinsic
+def atomic_cas(typingctx, arr, idx, expected, new):
+    """arr[idx] = new if arr[idx] == expected, atomically, on an int64 array; returns the old value
+    (claim a view only while it is there to claim)."""
+    if not (isinstance(arr, types.Array) and arr.dtype == types.int64 and arr.ndim == 1):
+        return None
+    sig = types.int64(arr, types.intp, types.int64, types.int64)
+
+    def codegen(context, builder, signature, args):
+        arrty = signature.args[0]
+        ary = context.make_array(arrty)(context, builder, args[0])
+        ptr = cgutils.get_item_pointer(context, builder, arrty, ary, [args[1]])
+        pair = builder.cmpxchg(ptr, args[2], args[3], "seq_cst", "seq_cst")
+        return builder.extract_value(pair, 0)
 
     return sig, codegen
 

@@ -5,7 +5,8 @@ binning, raster) in one compiled call that holds no GIL.
 This is the batch path for callers that have Python work of their own beside the render (the
 vector env: rig, rewards, observations of other envs). A batch is a stream: the caller `add`s
 views one at a time (each is staged and published at once) and `close`s it after the last; a
-`RenderHelpers` thread starts on the first view while the caller prepares the next ones, and
+`RenderHelpers` thread starts on the first view while the caller prepares the next ones (and
+sleeps, without spinning, whenever it has caught up with them), and
 the caller joins in (`RenderHelpers.complete` / `partial`) when its own work is done. Both cores
 render, without a numba parallel region whose join waits for a thread the caller's Python work
 keeps busy, and with projection and binning parallel too (as whole views).
@@ -24,7 +25,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ._jit import NREC, atomic_add, jit
+from ._jit import NREC, atomic_add, atomic_cas, jit
 from .batch import _MAX_TILE_LIST, BatchView, Staged, view_outputs
 from .binning import _fill_range, bin_offsets, plan_tiles
 from .cull import cull_view
@@ -36,7 +37,8 @@ __all__ = ["ClaimedBatch", "RenderHelpers"]
 
 _POLL_S = 50e-6           # sleep between looks at a helper's view that is still rendering
 _WAIT_S = 600.0            # a helper that takes longer over its last view is hung: raise instead of waiting
-_HANDOVER_SPINS = 200_000  # ~1-5 ms of looking for a helper to start on a batch (`RenderHelpers.handover`)
+_HANDOVER_SPINS = 10_000   # ~50-100 us of looking for a helper to start on a batch (`RenderHelpers.handover`)
+_HANDOVER_NAPS = 10        # then this many `_POLL_S` sleeps
 
 # the batch's shared counters (int64, changed only atomically once a thread may be working)
 _NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED = range(5)
@@ -99,16 +101,16 @@ def _work(state,          # [5] int64: next view to claim, views finished, views
           longest,        # [V] int64 out: each view's longest tile list
           ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats, Ks, sizes, nears, bgs,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
-    """Claim views one at a time (in view order) and render each once it is published, until the
-    batch is closed with no view left or `limit` are rendered; returns how many this call rendered.
-    A claimed view that is not published yet is waited for (spinning, without the GIL)."""
+    """Claim published views one at a time (in view order) and render each, until none is left
+    to claim or `limit` are rendered; returns how many this call rendered (never waits)."""
     atomic_add(state, 4, 1)                 # _ENTERED: a thread is at work (see `RenderHelpers.handover`)
     done = 0
     while limit < 0 or done < limit:
-        v = atomic_add(state, 0, 1)         # _NEXT
-        while v >= atomic_add(state, 2, 0):            # not published (yet)
-            if atomic_add(state, 3, 0) != 0 and v >= atomic_add(state, 2, 0):
-                return done                            # closed without it: nothing left to claim
+        v = atomic_add(state, 0, 0)         # _NEXT
+        if v >= atomic_add(state, 2, 0):    # nothing published left to claim
+            break
+        if atomic_cas(state, 0, v, v + 1) != v:
+            continue                         # another thread claimed v first
         longest[v] = _render_view(v, ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats,
                                   Ks, sizes, nears, bgs, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out,
                                   dummy_f, dummy_i)
@@ -149,11 +151,11 @@ class ClaimedBatch:
             returns False for a view that does not fit (start another batch for it).
         dim: the feature dimension D with `features` when `views` is None.
 
-    Call `work()` from each thread that should render (it renders published views, waits for
-    views still to come, and returns once the batch is closed and no view is left to claim; a
-    view another thread claimed may still be rendering), then `outputs()` once every view is
-    finished (`finished`), or `outputs(lo, hi)` once views lo..hi - 1 are (`views_done`).
-    Views are claimed in view order, so the first ones finish first.
+    Call `work()` from each thread that should render (it renders the published views nobody
+    has claimed and returns; a view another thread claimed may still be rendering; a
+    `RenderHelpers` thread calls it again on each `add` until the batch is closed), then
+    `outputs()` once every view is finished (`finished`), or `outputs(lo, hi)` once views
+    lo..hi - 1 are (`views_done`). Views are claimed in view order, so the first ones finish first.
     """
 
     def __init__(self, views: Optional[Sequence[BatchView]] = None, features: bool = False, cull: bool = False,
@@ -198,6 +200,7 @@ class ClaimedBatch:
         self._inst = np.empty(P, np.int32)
         self._fout = np.empty(D * P, f32)
         self._state = np.zeros(5, i64)
+        self._wake = threading.Event()           # set on every publish and on close
         self._vdone = np.zeros(V, i64)
         self._longest = np.zeros(V, i64)
         self.error: Optional[BaseException] = None
@@ -211,36 +214,64 @@ class ClaimedBatch:
         """Stage `view` after the published ones and publish it (a thread waiting in `work` starts
         on it at once); False, with nothing changed, when it does not fit in the capacity.
         `ValueError` on a closed batch or a view whose features do not match."""
+        fields = [view.means, view.quats, view.scales, view.opacities, view.colors, view.ids]
+        if self._features:
+            if view.features is None:
+                raise ValueError(f"Expected features of dimension {self._feat.shape[1]} in every view, found none")
+            fields.append(view.features)
+        return self._add(fields, view.size, view.viewmat, view.K, view.near, view.width, view.height,
+                         view.background)
+
+    def add_parts(self, parts: Sequence, viewmat: np.ndarray, K: np.ndarray, near: float, width: int, height: int,
+                  background: np.ndarray) -> bool:
+        """`add` of a view given as Gaussian parts (numpy `Gaussians`, composited in order as
+        `batch.batch_view` takes them; ids -1 where a part has none) without building its
+        `BatchView`: the vector env's per-view hot path."""
+        if self._features and any(p.features is None for p in parts):
+            raise ValueError(f"Expected features of dimension {self._feat.shape[1]} in every view, found a part "
+                             f"without")
+        fields = [[p.means for p in parts], [p.quats for p in parts], [p.scales for p in parts],
+                  [p.opacities for p in parts], [p.colors for p in parts],
+                  [p.object_ids for p in parts]]
+        if self._features:
+            fields.append([p.features for p in parts])
+        return self._add(fields, sum(len(p.means) for p in parts), viewmat, K, near, width, height, background)
+
+    def _add(self, fields: list, n: int, viewmat, K, near: float, width: int, height: int, background) -> bool:
+        """Stage one view: `fields` are its parts' arrays per field (means, quats, scales,
+        opacities, colors, ids[, features]; an id part may be None: -1 over that part)."""
         if self.closed:
             raise ValueError("Expected an open batch to add a view to, found it closed")
-        D = self._feat.shape[1]
-        if self._features and (view.features is None or any(f.shape[1] != D for f in view.features)):
-            raise ValueError(f"Expected features of dimension {D} in every view, found "
-                             f"{None if view.features is None else [f.shape[1] for f in view.features]}")
+        if self._features and any(f.shape[1] != self._feat.shape[1] for f in fields[6]):
+            raise ValueError(f"Expected features of dimension {self._feat.shape[1]} in every view, found "
+                             f"{[f.shape[1] for f in fields[6]]}")
         v, n0, p0, r0 = self.num_views, self._n, self._p, self._r
-        n, npx = view.size, view.width * view.height
+        width, height = int(width), int(height)
+        npx = width * height
         V, N, P = self._cap
         if v >= V or n0 + n > N or p0 + npx > P:
             return False
         n1 = n0 + n
-        fields = [(self._means, view.means), (self._quats, view.quats), (self._scales, view.scales),
-                  (self._opac, view.opacities), (self._colors, view.colors), (self._ids, view.ids)]
-        if self._features:
-            fields.append((self._feat, view.features))
-        for buf, parts in fields:
+        for buf, parts in zip((self._means, self._quats, self._scales, self._opac, self._colors, self._feat),
+                              fields[:5] + fields[6:]):
             if len(parts) == 1:
                 buf[n0:n1] = parts[0]
             elif parts:
                 np.concatenate(parts, out=buf[n0:n1], casting="same_kind")
-        self._viewmats[v] = view.viewmat
-        self._Ks[v] = view.K
-        self._sizes[v] = (view.width, view.height, (view.width + 15) // 16)
-        self._nears[v] = view.near
-        self._bgs[v] = view.background
+        k = n0
+        for means, ids in zip(fields[0], fields[5]):
+            m = len(means)
+            self._ids[k:k + m] = -1 if ids is None else ids
+            k += m
+        self._viewmats[v] = viewmat
+        self._Ks[v] = K
+        self._sizes[v] = (width, height, (width + 15) // 16)
+        self._nears[v] = near
+        self._bgs[v] = background
         if self._cull and n:
             k = cull_view(self._means, self._scales, self._opac, self._ids, n0, n1,
                           self._viewmats[v].astype(np.float64), self._Ks[v].astype(np.float64),
-                          int(view.width), int(view.height), float(self._nears[v]), self._ranges[r0:])
+                          width, height, float(self._nears[v]), self._ranges[r0:])
         elif n:
             self._ranges[r0] = (n0, n1)
             k = 1
@@ -250,12 +281,14 @@ class ClaimedBatch:
         self._rstart[v + 1] = r0 + k
         self._pix_off[v + 1] = p0 + npx
         _bump(self._state, _PUBLISHED)       # seq_cst: everything above is visible before the view is
+        self._wake.set()                     # a helper waiting for views goes on
         return True
 
     def close(self) -> None:
         """No more views: `work` returns once the published ones are claimed (idempotent)."""
         if not self.closed:
             _bump(self._state, _CLOSED)
+            self._wake.set()
 
     @property
     def closed(self) -> bool:
@@ -291,9 +324,9 @@ class ClaimedBatch:
         return hi <= self.num_views and bool(self._vdone[lo:hi].all())
 
     def work(self, limit: int = -1) -> int:
-        """Render views of this batch (waiting, without the GIL, for views not published yet) until
-        it is closed and none is left to claim, or `limit` of them; returns how many this call
-        rendered."""
+        """Render published views of this batch until none is left to claim, or `limit` of them
+        (holds no GIL while rendering, never waits for views to come); returns how many this
+        call rendered."""
         if self._cap[0] == 0:
             return 0
         return int(_work(self._state, int(limit), self._vdone, self._longest, self._ranges, self._rstart, self._means,
@@ -339,7 +372,7 @@ class RenderHelpers:
         self._threads: list[threading.Thread] = []
         self._lock = threading.Lock()            # starting and stopping threads
         self._count = threading.Lock()           # batches' count of helpers still at work
-        self._inflight = 0                       # batches submitted that some helper is still on
+        self._submitted: list = []               # the last two batches submitted
 
     def submit(self, batch: ClaimedBatch) -> ClaimedBatch:
         """Start the helpers on `batch` (no-op without helpers); returns it."""
@@ -348,23 +381,33 @@ class RenderHelpers:
         self._start()
         batch._left = self.helpers                       # helpers still to finish their part
         batch._done = threading.Event()
-        with self._count:
-            self._inflight += 1
+        self._submitted = (self._submitted + [batch])[-2:]
         for q in self._queues:
             q.put(batch)
         return batch
 
-    def handover(self, batch: ClaimedBatch, spins: int = _HANDOVER_SPINS) -> bool:
-        """Let a helper start on `batch` now: wait, without the GIL, until a thread has entered its
-        `work` (at most `spins` looks, ~1-5 ms). A helper woken while this thread runs Python waits
-        for the GIL, up to Python's switch interval (5 ms); call this right after `submit` and the
+    def handover(self, batch: ClaimedBatch, spins: int = _HANDOVER_SPINS, naps: int = _HANDOVER_NAPS) -> bool:
+        """Let a helper start on `batch` now: wait until a thread has entered its `work`, first
+        spinning without the GIL (at most `spins` looks, tens of microseconds: enough for a
+        helper on an idle core), then in up to `naps` short sleeps (the core may be shared: a
+        sleep lets the OS run the helper). A helper woken while this thread runs Python waits for
+        the GIL, up to Python's switch interval (5 ms); call this right after `submit` and the
         first `add`, before more Python work. Whether a thread has entered (True without helpers:
-        nothing to wait for; False at once while the helpers are still on an earlier batch)."""
+        nothing to wait for; False at once while an earlier batch still has views to render).
+        A helper done with the earlier batch may still wait for the GIL to leave its `work`:
+        this wait lets it."""
         if self.helpers == 0 or batch.entered:
             return True
-        if self._inflight > 1:
-            return False                         # the helpers are on an earlier batch: no waiting for them
-        return bool(_wait_entered(batch._state, int(spins)))
+        earlier = self._submitted[0] if self._submitted[-1] is batch and len(self._submitted) > 1 else None
+        if earlier is not None and not earlier.finished:
+            return False                         # the helpers are rendering an earlier batch: no waiting for them
+        if _wait_entered(batch._state, int(spins)):
+            return True
+        for _ in range(naps):
+            time.sleep(_POLL_S)
+            if batch.entered:
+                return True
+        return False
 
     def complete(self, batch: ClaimedBatch, timeout_s: float = _WAIT_S) -> list[dict]:
         """Render the views no helper has claimed, wait for the rest and return the outputs (of a
@@ -396,10 +439,13 @@ class RenderHelpers:
         return batch.outputs(lo, hi)
 
     def close(self) -> None:
-        """Stop the helper threads (a later `submit` starts new ones)."""
+        """Stop the helper threads (a later `submit` starts new ones). A batch still open is
+        closed first: a helper waiting for its next view would otherwise wait for ever."""
         with self._lock:
             queues, threads = self._queues, self._threads
             self._queues, self._threads = [], []
+        for batch in self._submitted:
+            batch.close()
         for q in queues:
             q.put(None)
         for t in threads:
@@ -421,16 +467,27 @@ class RenderHelpers:
             if batch is None:
                 return
             try:
-                batch.work()
+                self._serve(batch)
             except BaseException as exc:  # noqa: BLE001 - handed to the caller's complete()
                 batch.error = exc
             finally:
                 with self._count:
                     batch._left -= 1
                     last = batch._left == 0
-                    self._inflight -= int(last)
                 if last:
                     batch._done.set()
+
+    @staticmethod
+    def _serve(batch: ClaimedBatch) -> None:
+        """Render the batch's views as they are published, sleeping (no spinning) while it waits
+        for more, until it is closed and none is left."""
+        while True:
+            batch._wake.clear()
+            batch.work()
+            if batch.closed and not batch.claimable:
+                return
+            if not batch.claimable:
+                batch._wake.wait()
 
     def __getstate__(self) -> dict:
         return {"helpers": self.helpers}     # threads and queues do not copy: the copy starts its own
