@@ -9,6 +9,7 @@ from typing import Any, Mapping, Optional, Sequence
 import numpy as np
 from gymnasium import spaces
 
+from morphosim_gym.render.cpu.uint8 import to_uint8
 from morphosim_gym.rig import AGENT_OBJECT_ID
 
 __all__ = ["Observations", "observed_cameras", "action_space", "check_action"]
@@ -60,7 +61,7 @@ class Observations:
         obs: dict[str, np.ndarray] = {}
         for name, rgb_key, depth_key, seg_key in self._keys:
             _, rgb, depth, inst = views[name]
-            obs[rgb_key] = (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+            obs[rgb_key] = to_uint8(rgb)
             if self._depth:
                 obs[depth_key] = np.array(depth, dtype=np.float32)
             if self._segmentation:

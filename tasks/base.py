@@ -226,6 +226,11 @@ class Task:
     def ctrl_term(action: np.ndarray, cost: float) -> float:
         """-cost * mean(action^2), in [-cost, 0] for actions in [-1, 1]."""
         a = np.asarray(action, dtype=np.float64)
+        if a.ndim == 1 and 0 < a.size < 8:       # numpy's mean sums fewer than 8 values in order from 0.0
+            total = 0.0
+            for x in a.tolist():
+                total += x * x
+            return -float(cost) * (total / a.size)
         return -float(cost) * float(np.mean(a * a)) if a.size else 0.0
 
     @staticmethod
@@ -236,12 +241,11 @@ class Task:
         behind the camera or missing gets 4.0."""
         if point is None:
             return 4.0, 0.0
-        uv, z = camera.project(point)
-        z = float(z)
+        u, v, z = camera.project_point(point)
         if not z > camera.near:
             return 4.0, z
-        dx = (float(uv[0]) - camera.width / 2) / (camera.width / 2)
-        dy = (float(uv[1]) - camera.height / 2) / (camera.height / 2)
+        dx = (u - camera.width / 2) / (camera.width / 2)
+        dy = (v - camera.height / 2) / (camera.height / 2)
         return min(math.hypot(dx, dy), 4.0), z
 
     @staticmethod

@@ -39,6 +39,28 @@ def _shape(d: np.ndarray, sigmoid: str, value_at_margin: float) -> np.ndarray:
     raise ValueError(f"Expected sigmoid in {SIGMOIDS}, found {sigmoid!r}")
 
 
+def _scalar(x: float, lo: float, hi: float, margin: float, sigmoid: str, value_at_margin: float) -> float:
+    """`tolerance` of one number (the per-step reward path): the array path's arithmetic on floats,
+    so the value is the same to the bit (exp through numpy, as there)."""
+    if lo <= x <= hi:
+        return 1.0
+    if margin == 0:
+        return 0.0
+    d = (lo - x if x < lo else x - hi) / margin           # NaN stays NaN, as in the array path
+    return _shape_scalar(max(d, 0.0), sigmoid, value_at_margin)
+
+
+def _shape_scalar(d: float, sigmoid: str, v: float) -> float:
+    """`_shape` of one number."""
+    if sigmoid == "gaussian":
+        s = d * math.sqrt(-2.0 * math.log(v))
+        return float(np.exp(-0.5 * (s * s)))
+    if sigmoid == "long_tail":
+        s = d * math.sqrt(1.0 / v - 1.0)
+        return 1.0 / (s * s + 1.0)
+    return float(_shape(np.float64(d), sigmoid, v))
+
+
 def tolerance(x, bounds: tuple[float, float] = (0.0, 0.0), margin: float = 0.0, sigmoid: str = "gaussian",
               value_at_margin: float = 0.1):
     """1 where `bounds[0] <= x <= bounds[1]`, decaying to `value_at_margin` at `margin` outside.
@@ -66,6 +88,8 @@ def tolerance(x, bounds: tuple[float, float] = (0.0, 0.0), margin: float = 0.0, 
         raise ValueError(f"Expected margin >= 0, found {margin!r}")
     if not 0.0 <= value_at_margin < 1.0 or (value_at_margin == 0.0 and sigmoid not in ("linear", "quadratic")):
         raise ValueError(f"Expected value_at_margin in (0, 1), found {value_at_margin!r}")
+    if type(x) is float or type(x) is int or type(x) is np.float64:
+        return _scalar(float(x), lo, hi, margin, sigmoid, value_at_margin)
     arr = np.asarray(x, dtype=np.float64)
     inside = (arr >= lo) & (arr <= hi)
     if margin == 0:

@@ -44,8 +44,9 @@ class RenderOutput:
 
     def rgb_uint8(self) -> np.ndarray:
         """`rgb` as uint8 (numpy), for images and videos."""
-        rgb = self.rgb.detach().cpu().numpy() if hasattr(self.rgb, "detach") else self.rgb
-        return (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+        from .cpu.uint8 import to_uint8
+
+        return to_uint8(self.rgb.detach().cpu().numpy() if hasattr(self.rgb, "detach") else self.rgb)
 
 
 Source = Union[Scene4D, Gaussians, Sequence[Union[Scene4D, Gaussians]]]

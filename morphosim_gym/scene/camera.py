@@ -197,6 +197,16 @@ class Camera:
             uv = np.stack([self.fx * pc[..., 0] / z + self.cx, self.fy * pc[..., 1] / z + self.cy], axis=-1)
         return uv, z
 
+    def project_point(self, point: np.ndarray) -> tuple[float, float, float]:
+        """(x, y, depth) of one world point [3] as floats: `project`'s values for it, to the bit
+        (the per-step task path, without `project`'s array bookkeeping)."""
+        pc = (np.asarray(point, dtype=np.float64) @ self.world_to_camera[:3, :3].T + self.world_to_camera[:3, 3]).tolist()
+        z = pc[2]
+        if z == 0.0:
+            uv = self.project(point)[0]
+            return float(uv[0]), float(uv[1]), z
+        return self.fx * pc[0] / z + self.cx, self.fy * pc[1] / z + self.cy, z
+
     def pixel_centres(self) -> np.ndarray:
         """[H, W, 2] pixel coordinates (x, y) of every pixel's centre."""
         jj, ii = np.meshgrid(np.arange(self.width) + 0.5, np.arange(self.height) + 0.5)

@@ -46,6 +46,25 @@ def test_tolerance_shapes():
         tolerance(2, (0, 1), margin=1, sigmoid="cubic")
 
 
+@pytest.mark.parametrize("sigmoid", SIGMOIDS)
+def test_tolerance_of_a_number_is_the_array_value_to_the_bit(sigmoid):
+    # the per-step reward path takes numbers through a float fast path: same value, same type
+    xs = np.concatenate([np.random.default_rng(0).normal(0.3, 1.5, 200), [0.0, 0.15, 0.6, -np.inf, np.inf, np.nan]])
+    for bounds, margin in [((0.0, 0.15), 0.5), ((0.12, 0.6), 0.15), ((0.0, 0.0), 1.0), ((0.0, 1.0), 0.0)]:
+        ref = tolerance(xs, bounds, margin, sigmoid=sigmoid, value_at_margin=0.3)
+        got = [tolerance(float(x), bounds, margin, sigmoid=sigmoid, value_at_margin=0.3) for x in xs]
+        assert all(type(g) is float for g in got)
+        np.testing.assert_array_equal(np.array(got), ref)
+
+
+def test_ctrl_term_is_numpys_mean_to_the_bit():
+    rng = np.random.default_rng(1)
+    for n in range(1, 12):
+        for _ in range(50):
+            a = rng.uniform(-1, 1, n)
+            assert TrackTask.ctrl_term(a, 0.013) == -0.013 * float(np.mean(a * a))
+
+
 def test_builtin_tasks_load_and_match_their_kinds():
     assert builtin_task_names() == ["find", "reach", "track"]
     for name in builtin_task_names():

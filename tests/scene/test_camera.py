@@ -38,6 +38,16 @@ def test_project_unproject_roundtrip():
     np.testing.assert_array_equal(centres[2, 5], [5.5, 2.5])         # (x, y) of row 2, column 5
 
 
+def test_project_point_is_project_to_the_bit():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        cam = Camera.look_at(rng.normal(0, 3, 3), rng.normal(0, 1, 3), width=84, height=64, fov_y_deg=55)
+        p = rng.normal(0, 3, 3)
+        uv, z = cam.project(p)
+        got = cam.project_point(p)
+        assert got == (float(uv[0]), float(uv[1]), float(z)) and all(type(v) is float for v in got)
+
+
 @pytest.mark.parametrize("bad", [
     dict(eye=(0, 0, 0), target=(0, 0, 0)),
     dict(eye=(0, 0, 5), target=(0, 0, 0)),            # looking straight down with up=z
