@@ -396,6 +396,9 @@ class MorphoSimVectorEnv(VectorEnv):
         """`_add_info` of each (env index, info) in order, key by key: one array, one mask and one
         assignment per key for all envs instead of per env (same arrays, dtypes, masks and key
         order; a key whose values mix dicts and non-dicts takes `_add_info` env by env)."""
+        same = _same_keys(entries, self.num_envs, self._batch_infos)
+        if same is not None:
+            return same
         columns: dict = {}
         for i, info in entries:
             for key, value in info.items():
@@ -535,6 +538,49 @@ def _checked_batch(actions: Any, n: int, shape: tuple) -> Optional[np.ndarray]:
     if not np.isfinite(a).all():
         return None
     return np.clip(a, -1.0, 1.0)
+
+
+def _same_keys(entries: list, n: int, batch: Callable[[list], dict]) -> Optional[dict]:
+    """`_batch_infos` of infos that all have the same keys in the same order (every step but the
+    few with resets: the per-step path), or None when they do not, or when a key's values are
+    not all dicts or all non-dicts (the general path then batches them). Nested dicts go to
+    `batch` (`_batch_infos`)."""
+    if not entries:
+        return None
+    infos = [info for _, info in entries]
+    keys = list(infos[0])
+    if any(type(info) is not dict or list(info) != keys for info in infos):
+        return None
+    index = [i for i, _ in entries]
+    everyone = index == list(range(n))
+    present = np.zeros(n, dtype=np.bool_)
+    present[index] = True
+    out: dict = {}
+    for key in keys:
+        values = [info[key] for info in infos]
+        if key != "final_obs" and type(values[0]) is dict:
+            if not all(type(v) is dict for v in values):
+                return None
+            array = batch(list(zip(index, values)))
+        elif key != "final_obs" and any(type(v) is dict for v in values):
+            return None
+        elif key == "final_obs":
+            array = np.full(n, fill_value=None, dtype=object)
+            for i, v in zip(index, values):
+                array[i] = v
+        else:
+            array = _info_values(index, values, n, everyone)
+        out[key], out[f"_{key}"] = array, present.copy()
+    return out
+
+
+def _info_values(index: list, values: list, n: int, everyone: bool) -> np.ndarray:
+    """The batch array of one info key from env `index`'s `values` (`_info_column`'s array)."""
+    first = values[0]
+    kind = type(first)
+    if everyone and (kind is float or kind is bool or kind is int) and all(type(v) is kind for v in values):
+        return np.array(values, dtype=kind)
+    return _info_column(list(zip(index, values)), n)
 
 
 def _info_column(column: list, n: int) -> np.ndarray:
