@@ -13,7 +13,8 @@ import torch
 
 from morphosim_gym.render.cpu import _jit
 from morphosim_gym.render.cpu.backward import NGRAD
-from morphosim_gym.render.cpu.binning import argsort_int, bin_fill, bin_offsets, plan_tiles, sort_segment
+from morphosim_gym.render.cpu.binning import (argsort_int, bin_fill, bin_offsets, plan_tiles, sort_segment,
+                                              sorted_fill)
 from morphosim_gym.render.cpu.projection import project_backward, project_forward
 from morphosim_gym.render.reference import project_torch
 
@@ -99,6 +100,38 @@ def test_binning_and_tile_sort_are_stable_depth_order():
                     and trect[2, i] <= t // ((W + 15) // 16) <= trect[3, i]]
         expected = np.asarray(expected, np.int64)
         np.testing.assert_array_equal(seg, expected[np.argsort(z[expected], kind="stable")])
+
+
+@pytest.mark.parametrize("ranges", [[(0, 3000)], [(0, 700), (900, 2500), (2600, 3000)]])
+def test_sorted_fill_gives_the_lists_the_per_tile_sort_gives(ranges):
+    # one depth sort of the visible Gaussians, then the fill: each tile's list as bin_fill +
+    # sort_segment leave it, exact depth ties included (stable: index order), over index ranges
+    scene = random_scene(2, 3000)
+    scene["means"] = np.round(scene["means"] * 4) / 4
+    W, H = 64, 48
+    vm, K, near = (a[0] for a in camera_arrays(cameras(W, H, 1)))
+    rec, trect, _ = _project(scene, vm, K, W, H, near[()])
+    keep = np.zeros(3000, bool)
+    for lo, hi in ranges:
+        keep[lo:hi] = True
+    trect[:, ~keep] = np.array([[0], [-1], [0], [-1]])                # outside the ranges: as if culled
+    tiles_x, ntiles = (W + 15) // 16, ((W + 15) // 16) * ((H + 15) // 16)
+    counts = np.zeros((1, ntiles), np.int32)
+    for i in np.flatnonzero(trect[1] >= trect[0]):
+        for ty in range(trect[2, i], trect[3, i] + 1):
+            counts[0, ty * tiles_x + trect[0, i]:ty * tiles_x + trect[1, i] + 1] += 1
+    tile_start = np.empty(ntiles + 1, np.int64)
+    off = np.empty((1, ntiles), np.int64)
+    total = bin_offsets(counts, tile_start, off)
+    expected = np.empty(total, np.int32)
+    bin_fill(trect, tiles_x, off.copy(), expected)
+    keys, idx, hist = np.empty(total, np.uint64), np.empty(total, np.int32), np.empty(256, np.int64)
+    for t in range(ntiles):
+        sort_segment(expected, tile_start[t], tile_start[t + 1] - tile_start[t], rec, keys, keys.copy(), idx,
+                     idx.copy(), hist)
+    got = np.full(total, -1, np.int32)
+    sorted_fill(np.array(ranges, np.int64), trect, rec, tiles_x, tile_start, got)
+    np.testing.assert_array_equal(got, expected)
 
 
 def test_argsort_int_is_stable():

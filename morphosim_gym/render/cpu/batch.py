@@ -30,10 +30,10 @@ import numpy as np
 from numba import prange
 
 from ._jit import NREC, jit, pjit
-from .binning import _fill_range, plan_tiles
+from .binning import _fill_range, plan_tiles, sorted_fill
 from .cull import cull_view
 from .forward import _raster_tiles
-from .pipeline import Workspace, thread_workspace
+from .pipeline import _PRESORT_ENTRIES_PER_TILE, Workspace, thread_workspace
 from .projection import _project_range
 
 __all__ = ["rasterize_batch_numpy", "BatchView", "batch_view", "Staged", "stage_views", "view_outputs"]
@@ -135,9 +135,25 @@ def _fill_items_serial(items, sizes, trect, item_off, lst):
         _fill_range(items[k, 1], items[k, 2], trect, sizes[items[k, 0], 2], item_off[k], lst)
 
 
+@pjit
+def _sorted_fill_views(ranges, rstart, sizes, tstart, tile_start, lst_base, trect, rec, lst):
+    """`binning.sorted_fill` of every view (views in parallel)."""
+    for v in prange(sizes.shape[0]):
+        sorted_fill(ranges[rstart[v]:rstart[v + 1]], trect, rec, sizes[v, 2], tile_start[tstart[v]:tstart[v + 1]],
+                    lst[lst_base[v]:lst_base[v + 1]])
+
+
+@jit
+def _sorted_fill_views_serial(ranges, rstart, sizes, tstart, tile_start, lst_base, trect, rec, lst):
+    """`_sorted_fill_views` on the calling thread."""
+    for v in range(sizes.shape[0]):
+        sorted_fill(ranges[rstart[v]:rstart[v + 1]], trect, rec, sizes[v, 2], tile_start[tstart[v]:tstart[v + 1]],
+                    lst[lst_base[v]:lst_base[v + 1]])
+
+
 @jit
 def _raster_views(v_lo, v_hi, claims, order, tstart, tile_start, lst_base, lst, rec, ids, feat, sizes, bgs,
-                  pix_off, rgb, depth, alpha, inst, feat_out, tfinal, last, keys, keys2, idx, idx2):
+                  pix_off, rgb, depth, alpha, inst, feat_out, tfinal, last, keys, keys2, idx, idx2, presorted):
     D = feat.shape[1]
     for v in range(v_lo, v_hi):
         w = sizes[v, 0]
@@ -151,18 +167,19 @@ def _raster_views(v_lo, v_hi, claims, order, tstart, tile_start, lst_base, lst, 
                       rgb[3 * p0:3 * (p0 + npx)].reshape((h, w, 3)), depth[p0:p0 + npx].reshape((h, w)),
                       alpha[p0:p0 + npx].reshape((h, w)), inst[p0:p0 + npx].reshape((h, w)),
                       feat_out[D * p0:D * (p0 + npx)].reshape((h, w, D)), tfinal, last, False,
-                      keys, keys2, idx, idx2)
+                      keys, keys2, idx, idx2, presorted)
 
 
 @pjit
 def _raster_items(claims, order, tstart, tile_start, lst_base, lst, rec, ids, feat, sizes, bgs, pix_off,
-                  rgb, depth, alpha, inst, feat_out, tfinal, last, keys, keys2, idx, idx2):
+                  rgb, depth, alpha, inst, feat_out, tfinal, last, keys, keys2, idx, idx2, presorted):
     nthr = keys.shape[0]
     claims[:] = 0
     V = sizes.shape[0]
     for k in prange(nthr):
         _raster_views(0, V, claims, order, tstart, tile_start, lst_base, lst, rec, ids, feat, sizes, bgs, pix_off,
-                      rgb, depth, alpha, inst, feat_out, tfinal, last, keys[k], keys2[k], idx[k], idx2[k])
+                      rgb, depth, alpha, inst, feat_out, tfinal, last, keys[k], keys2[k], idx[k], idx2[k],
+                      presorted)
 
 
 def _work_items(goff: np.ndarray, nthr: int, kept: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -333,7 +350,13 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
         raise ValueError(f"Expected at most {_MAX_TILE_LIST - 1} Gaussians over one 16x16 tile in float32, "
                          f"found {longest} (list positions are kept as floats)")
     lst = ws.get("lst", (int(total),), np.int32)
-    if len(items):
+    # depth-sorted fills per view (one sort of each view's visible Gaussians) where the lists are
+    # short or there is one thread; else per-tile sorts in the parallel raster (same lists)
+    presorted = serial or int(total) <= _PRESORT_ENTRIES_PER_TILE * int(ntiles.sum())
+    if len(items) and presorted:
+        (_sorted_fill_views_serial if serial else _sorted_fill_views)(s.ranges, s.rstart, sizes, tstart, tile_start,
+                                                                       lst_base, trect, rec, lst)
+    elif len(items):
         (_fill_items_serial if serial else _fill_items)(items, sizes, trect, item_off, lst)
     m = max(longest, 1)
     keys = ws.get("keys", (nthr, m), _KEY_DTYPE)
@@ -348,7 +371,7 @@ def rasterize_batch_numpy(views: Sequence[BatchView], features: bool = False, cu
     fout = np.empty(D * P, f32)
     claims = ws.get("claims", (V,), np.int64)
     _raster_items(claims, order, tstart, tile_start, lst_base, lst, rec, ids, feat, sizes, bgs, pix_off,
-                  rgb, depth, alpha, inst, fout, _DUMMY_F, _DUMMY_I, keys, keys2, idx, idx2)
+                  rgb, depth, alpha, inst, fout, _DUMMY_F, _DUMMY_I, keys, keys2, idx, idx2, presorted)
     return view_outputs(s, rgb, depth, alpha, inst, fout)
 
 

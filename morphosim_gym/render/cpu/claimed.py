@@ -27,7 +27,7 @@ import numpy as np
 
 from ._jit import NREC, atomic_add, atomic_cas, jit
 from .batch import _MAX_TILE_LIST, BatchView, Staged, view_outputs
-from .binning import _fill_range, bin_offsets, plan_tiles
+from .binning import bin_offsets, plan_tiles, sorted_fill
 from .cull import cull_view
 from .forward import _raster_tiles
 from .pipeline import Workspace
@@ -68,20 +68,18 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
     for r in range(nr):
         _project_range(ranges[r0 + r, 0], ranges[r0 + r, 1], means, quats, scales, opacities, colors, feat,
                        viewmats[v], Ks[v], w, h, nears[v], rec, trect, tx, counts[r])
-    # offsets: per tile, the ranges in index order (each tile list ascending, as every other path)
+    # tile lists in depth order (ties in index order), as the per-tile sort of every other path leaves them
     tile_start = np.empty(nt + 1, np.int64)
     off = np.empty((max(nr, 1), nt), np.int64)
     acc = bin_offsets(counts[:nr], tile_start, off[:nr])
     lst = np.empty(max(acc, 1), np.int32)
-    for r in range(nr):
-        _fill_range(ranges[r0 + r, 0], ranges[r0 + r, 1], trect, tx, off[r], lst)
+    sorted_fill(ranges[r0:r0 + nr], trect, rec, tx, tile_start, lst)
     order = np.empty(nt, np.int32)
     longest = plan_tiles(tile_start, order)
-    m = max(longest, 1)
-    keys = np.empty(m, np.uint32)
-    keys2 = np.empty(m, np.uint32)
-    idx = np.empty(m, np.int32)
-    idx2 = np.empty(m, np.int32)
+    keys = np.empty(1, np.uint32)            # no per-tile sort: no sort scratch
+    keys2 = np.empty(1, np.uint32)
+    idx = np.empty(1, np.int32)
+    idx2 = np.empty(1, np.int32)
     claim = np.zeros(1, np.int64)
     D = feat.shape[1]
     p0 = pix_off[v]
@@ -90,7 +88,7 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
                   rgb[3 * p0:3 * (p0 + npx)].reshape((h, w, 3)), depth[p0:p0 + npx].reshape((h, w)),
                   alpha[p0:p0 + npx].reshape((h, w)), inst[p0:p0 + npx].reshape((h, w)),
                   feat_out[D * p0:D * (p0 + npx)].reshape((h, w, D)), dummy_f, dummy_i, False,
-                  keys, keys2, idx, idx2)
+                  keys, keys2, idx, idx2, True)
     return longest
 
 

@@ -70,7 +70,8 @@ def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
                   last_out,    # [H, W] int32 out (if save)
                   save,
                   keys, keys2,  # [max_len] sort scratch (uint of the float width)
-                  idx, idx2):   # [max_len] int32 sort scratch
+                  idx, idx2,    # [max_len] int32 sort scratch
+                  presorted=False):   # lists already depth-sorted (`binning.sorted_fill`)
     F = rec.dtype.type
     D = feat.shape[1]
     S = np.empty(_S_SIZE, F)
@@ -104,7 +105,8 @@ def _raster_tiles(order,       # [n_tiles] int32 tiles, longest list first
         tile = order[q]
         start = tile_start[tile]
         L = tile_start[tile + 1] - start
-        sort_segment(lst, start, L, rec, keys, keys2, idx, idx2, hist)
+        if not presorted:
+            sort_segment(lst, start, L, rec, keys, keys2, idx, idx2, hist)
         x0 = (tile % tiles_x) * 16
         y0 = (tile // tiles_x) * 16
         nx = min(16, width - x0)
@@ -241,12 +243,14 @@ def raster_forward(order,       # [n_tiles] int32 tiles, longest list first
                    feat_out,    # [H, W, D] out
                    tfinal,      # [H, W] out, written when save
                    last_out,    # [H, W] int32 out, written when save
-                   save):
-    """Sort each tile's list by depth, then composite it. Tiles are claimed one at a time from
-    `order` by whichever thread is free (each tile's result is independent of the thread)."""
+                   save,
+                   presorted=False):   # lists already depth-sorted (`binning.sorted_fill`)
+    """Sort each tile's list by depth (unless `presorted`), then composite it. Tiles are claimed
+    one at a time from `order` by whichever thread is free (each tile's result is independent of
+    the thread)."""
     nthr = keys.shape[0]
     claim[0] = 0
     for k in prange(nthr):
         _raster_tiles(order, claim, tile_start, lst, rec, ids, feat, width, height, tiles_x, bg,
                       rgb, depth, alpha, inst, feat_out, tfinal, last_out, save,
-                      keys[k], keys2[k], idx[k], idx2[k])
+                      keys[k], keys2[k], idx[k], idx2[k], presorted)

@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 from ._jit import NREC
-from .binning import bin_fill, bin_offsets, plan_tiles
+from .binning import bin_fill, bin_offsets, plan_tiles, sorted_fill
 from .forward import raster_forward
 from .projection import project_forward
 
@@ -25,6 +25,7 @@ __all__ = ["rasterize_numpy", "render_camera", "FrameState", "StageTimer", "Work
 
 _KEY_DTYPE = {np.dtype(np.float32): np.uint32, np.dtype(np.float64): np.uint64}
 _MAX_TILE_LIST = {np.dtype(np.float32): 1 << 24, np.dtype(np.float64): 1 << 53}
+_PRESORT_ENTRIES_PER_TILE = 128   # below this mean list length a serial presort beats parallel per-tile sorts
 
 
 @dataclass
@@ -138,7 +139,13 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
     thread_off = ws.get("thread_off", (nthr, ntiles), np.int64)
     total = bin_offsets(counts, tile_start, thread_off)
     lst = ws.get("lst", (total,), np.int32)
-    bin_fill(trect, tiles_x, thread_off, lst)
+    # one depth sort of the visible Gaussians on one thread, or per-tile sorts in the parallel
+    # raster when there are threads to share them and the lists are long (same lists either way)
+    presorted = nthr == 1 or total <= _PRESORT_ENTRIES_PER_TILE * ntiles
+    if presorted:
+        sorted_fill(np.array([[0, n]], np.int64), trect, rec, tiles_x, tile_start, lst)
+    else:
+        bin_fill(trect, tiles_x, thread_off, lst)
     order = ws.get("order", (ntiles,), np.int32)
     max_len = plan_tiles(tile_start, order)
     if max_len >= _MAX_TILE_LIST[dtype]:
@@ -159,7 +166,7 @@ def render_camera(means, quats, scales, opacities, colors, feat, ids,
         tfinal = _DUMMY_F[dtype]
         last = _DUMMY_I
     raster_forward(order, ws.get("claim", (1,), np.int64), keys, keys2, idx, idx2, tile_start, lst, rec, ids, feat,
-                   width, height, tiles_x, bg, rgb, depth, alpha, inst, feat_out, tfinal, last, save)
+                   width, height, tiles_x, bg, rgb, depth, alpha, inst, feat_out, tfinal, last, save, presorted)
     if timer:
         timer.lap("raster")
     if not save:
