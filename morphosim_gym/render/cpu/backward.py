@@ -45,7 +45,8 @@ NGRAD = 10
 _OPTS = dict(cache=True, error_model="numpy", fastmath={"contract", "reassoc"}, nogil=True)
 _jit_r = numba.njit(**_OPTS)
 
-# per-pixel state of one tile (flat, constant offsets; see forward.py)
+# per-pixel state of one tile (flat, constant offsets, pixels by 8-pixel half tile as in forward.py:
+# p = 128 * (lx // 8) + 8 * ly + lx % 8)
 _S_T = 0
 _S_P = 256      # prefix sum of w_j G_j
 _S_GR = 512     # upstream gradients (rgb, dsum) and Q
@@ -120,11 +121,11 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
         kend = 0
         for p in range(256):
             lastp[p] = 0
-            S[_S_PX + p] = F(x0 + (p & 15)) + half
-            S[_S_PY + p] = F(y0 + (p >> 4)) + half
+            S[_S_PX + p] = F(x0 + ((p >> 7) << 3) + (p & 7)) + half
+            S[_S_PY + p] = F(y0 + ((p >> 3) & 15)) + half
         for ly in range(ny):
             for lx in range(nx):
-                p = (ly << 4) + lx
+                p = ((lx >> 3) << 7) + (ly << 3) + (lx & 7)
                 yy = y0 + ly
                 xx = x0 + lx
                 Tf = tfinal[yy, xx]
@@ -158,13 +159,13 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
         nev = 0
         for p in range(256):
             if lastp[p] > 0:
-                rowbits[p >> 4] |= 1 << (p & 15)
+                rowbits[(p >> 3) & 15] |= 1 << (((p >> 7) << 3) + (p & 7))
             else:
                 nev += 1
         for k in range(kend):
             while nev < 256 and lastp[pix_order[nev]] <= k:
                 p = pix_order[nev]
-                rowbits[p >> 4] &= ~(1 << (p & 15))
+                rowbits[(p >> 3) & 15] &= ~(1 << (((p >> 7) << 3) + (p & 7)))
                 nev += 1
             i = lst[start + k]
             lx0 = max(np.int64(rec[i, R_X0]) - x0, 0)
@@ -193,17 +194,21 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
             cg = rec[i, R_G]
             cbl = rec[i, R_B]
             kf = F(k)
-            pa = ly0 << 4
-            pb = (ly1 + 1) << 4
+            h0 = lx0 >> 3            # the 8-pixel halves of the tile the box touches
+            h1 = lx1 >> 3
+            ra = ly0 << 3
+            rb = (ly1 + 1) << 3
             if D > 0:
-                for pp in range(pa, pb):
-                    S[uGF + np.uint64(pp)] = zero
+                for hh in range(h0, h1 + 1):
+                    for pp in range((hh << 7) + ra, (hh << 7) + rb):
+                        S[uGF + np.uint64(pp)] = zero
                 for d in range(D):
                     fd = feat[i, d]
                     fb = np.uint64(d * 256)
-                    for pp in range(pa, pb):
-                        p = np.uint64(pp)
-                        S[uGF + p] += gfp[fb + p] * fd
+                    for hh in range(h0, h1 + 1):
+                        for pp in range((hh << 7) + ra, (hh << 7) + rb):
+                            p = np.uint64(pp)
+                            S[uGF + p] += gfp[fb + p] * fd
             g_mx = zero
             g_my = zero
             g_ca = zero
@@ -214,40 +219,41 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
             g_r = zero
             g_g = zero
             g_b = zero
-            for pp in range(pa, pb):
-                p = np.uint64(pp)
-                dx = mx - S[uPX + p]
-                dy = my - S[uPY + p]
-                power = F(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy
-                e = splat_exp(power)
-                aw = op * e
-                al = min(amax, aw)
-                ok = (kf < S[uL + p]) & (al >= amin) & (power <= zero)
-                Tp = S[uT + p]
-                w = al * Tp if ok else zero
-                gR = S[uGR + p]
-                gG = S[uGG + p]
-                gB = S[uGB + p]
-                gD = S[uGD + p]
-                Gv = gR * cr + gG * cg + gB * cbl + gD * z + S[uGF + p]
-                Pold = S[uP + p]
-                Pn = Pold + w * Gv
-                dal = Tp * Gv - (S[uQ + p] - Pn) / (one - al)
-                dal = dal if (ok & (aw <= amax)) else zero
-                dpow = dal * aw
-                g_op += dal * e
-                g_mx -= dpow * (ca * dx + cb * dy)
-                g_my -= dpow * (cc * dy + cb * dx)
-                g_ca -= dpow * half * dx * dx
-                g_cb -= dpow * dx * dy
-                g_cc -= dpow * half * dy * dy
-                g_r += w * gR
-                g_g += w * gG
-                g_b += w * gB
-                g_z += w * gD
-                S[uW + p] = w
-                S[uP + p] = Pn if ok else Pold + zero
-                S[uT + p] = Tp * (one - al) if ok else Tp + zero
+            for hh in range(h0, h1 + 1):
+                for pp in range((hh << 7) + ra, (hh << 7) + rb):
+                    p = np.uint64(pp)
+                    dx = mx - S[uPX + p]
+                    dy = my - S[uPY + p]
+                    power = F(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy
+                    e = splat_exp(power)
+                    aw = op * e
+                    al = min(amax, aw)
+                    ok = (kf < S[uL + p]) & (al >= amin) & (power <= zero)
+                    Tp = S[uT + p]
+                    w = al * Tp if ok else zero
+                    gR = S[uGR + p]
+                    gG = S[uGG + p]
+                    gB = S[uGB + p]
+                    gD = S[uGD + p]
+                    Gv = gR * cr + gG * cg + gB * cbl + gD * z + S[uGF + p]
+                    Pold = S[uP + p]
+                    Pn = Pold + w * Gv
+                    dal = Tp * Gv - (S[uQ + p] - Pn) / (one - al)
+                    dal = dal if (ok & (aw <= amax)) else zero
+                    dpow = dal * aw
+                    g_op += dal * e
+                    g_mx -= dpow * (ca * dx + cb * dy)
+                    g_my -= dpow * (cc * dy + cb * dx)
+                    g_ca -= dpow * half * dx * dx
+                    g_cb -= dpow * dx * dy
+                    g_cc -= dpow * half * dy * dy
+                    g_r += w * gR
+                    g_g += w * gG
+                    g_b += w * gB
+                    g_z += w * gD
+                    S[uW + p] = w
+                    S[uP + p] = Pn if ok else Pold + zero
+                    S[uT + p] = Tp * (one - al) if ok else Tp + zero
             e = start + k
             grad_e[e, G_MX] = g_mx
             grad_e[e, G_MY] = g_my
@@ -262,9 +268,10 @@ def _backward_tiles(order,        # [n_tiles] int32 tiles, longest list first
             for d in range(D):
                 fb = np.uint64(d * 256)
                 s = zero
-                for pp in range(pa, pb):
-                    p = np.uint64(pp)
-                    s += S[uW + p] * gfp[fb + p]
+                for hh in range(h0, h1 + 1):
+                    for pp in range((hh << 7) + ra, (hh << 7) + rb):
+                        p = np.uint64(pp)
+                        s += S[uW + p] * gfp[fb + p]
                 gfeat_e[e, d] = s
         # entries behind every pixel's stop position got no gradient
         for e in range(start + kend, start + L):
