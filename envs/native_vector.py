@@ -150,6 +150,7 @@ class MorphoSimVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, n)
         self._autoreset = np.zeros(n, dtype=bool)
         self._obs: list = [None] * n
+        self._boxes: Optional[bool] = None       # the observation space is a dict of boxes (`_batched_obs`)
 
     # ================================================================== reset
     def reset(self, *, seed: int | Sequence[Optional[int]] | None = None,
@@ -218,14 +219,14 @@ class MorphoSimVectorEnv(VectorEnv):
         """Every env's action, checked before any env is stepped (a bad one raises, naming its env,
         and no env moves): float64 clipped to [-1, 1], as `check_action` gives a single env."""
         n = self.num_envs
-        acts = list(iterate(self.action_space, actions))
-        if len(acts) != n:
-            raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
         shape = self.single_action_space.shape
         if all(w is None for w in self._steppers):
             batch = _checked_batch(actions, n, shape)
             if batch is not None:
                 return list(batch)               # rows of one clipped float64 array
+        acts = list(iterate(self.action_space, actions))
+        if len(acts) != n:
+            raise ValueError(f"Expected actions for {n} envs, found {len(acts)}")
         out = []
         for i, a in enumerate(acts):
             if self._steppers[i] is not None:
@@ -283,6 +284,8 @@ class MorphoSimVectorEnv(VectorEnv):
     def _chunks(self, indices: list) -> list:
         """The stepping envs in `pipeline` contiguous chunks (one chunk: no worker thread)."""
         k = max(1, min(self._pipeline_chunks(), len(indices)))
+        if k == 1:
+            return [list(indices)] if indices else []
         bounds = np.linspace(0, len(indices), k + 1).round().astype(int)
         return [indices[bounds[j]:bounds[j + 1]] for j in range(k) if bounds[j + 1] > bounds[j]]
 
@@ -430,8 +433,17 @@ class MorphoSimVectorEnv(VectorEnv):
         return out
 
     def _batched_obs(self) -> dict:
-        return concatenate(self.single_observation_space, self._obs,
-                           create_empty_array(self.single_observation_space, self.num_envs))
+        """Gymnasium's `concatenate` of the envs' observations: for a dict of boxes (every env's)
+        one `np.stack` per key into an array of the space's dtype, without its dispatch."""
+        space = self.single_observation_space
+        if self._boxes is None:
+            self._boxes = isinstance(space, gym.spaces.Dict) and all(
+                type(sub) is gym.spaces.Box for sub in space.spaces.values())
+        if not self._boxes:
+            return concatenate(space, self._obs, create_empty_array(space, self.num_envs))
+        n = self.num_envs
+        return {key: np.stack([o[key] for o in self._obs], out=np.empty((n, *sub.shape), sub.dtype))
+                for key, sub in space.spaces.items()}
 
     # ================================================================== per-env access
     def perturb(self, i: int, text: str) -> bool:
