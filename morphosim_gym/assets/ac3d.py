@@ -102,6 +102,8 @@ class _Lines:
 
     def __init__(self, text: str, label: str) -> None:
         self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        if self.lines[-1] == "":
+            self.lines.pop()            # the final line end: the file's last line is its last text
         self.label, self.i = label, 0
 
     @property

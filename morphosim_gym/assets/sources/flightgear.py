@@ -84,7 +84,7 @@ _HOSE = ("^hose$", "^drogue$")       # a tanker aircraft's refuelling hose, trai
 MODELS: dict[str, FlightGearModel] = {
     # ---- aircraft
     "aircraft/h60": _m("Aircraft/H-60.ac", "Military helicopter", "helicopter",
-                       "helicopter, Seahawk, H-60, Black Hawk, navy helicopter", 19.8),
+                       "helicopter, Seahawk, H-60, Black Hawk, navy helicopter", 17.5),    # rotors at 45 degrees
     "aircraft/dauphin": _m("Aircraft/dauphin.ac", "Rescue helicopter", "helicopter",
                            "helicopter, Dauphin, coast guard helicopter", 13.7),
     "aircraft/kc135": _m("Geometry/KC135/KC135.ac", "Jet airliner", "airplane",
@@ -162,8 +162,8 @@ MODELS: dict[str, FlightGearModel] = {
     "ships/carrier": _m("Geometry/Nimitz/nimitz.ac", "Aircraft carrier", "ship",
                         "carrier, flattop, warship, Nimitz", 333.0),
     "ships/landing_craft": _m("Maritime/Military/LCM6.ac", "Landing craft", "boat",
-                              "LCM-6, landing boat, amphibious craft", 17.1, yaw=180),
-    "ships/liferaft": _m("Maritime/Misc/liferaft4m.ac", "Life raft", "boat", "liferaft, raft, inflatable raft", 4.0),
+                              "LCM-6, landing boat, amphibious craft", 17.1, yaw=180, unit=0.702),  # drawn 1.42x
+    "ships/liferaft": _m("Maritime/Misc/liferaft4m.ac", "Life raft", "boat", "liferaft, raft, inflatable raft", 4.0, yaw=0),
     # ---- at sea
     "sea/buoy": _m("Maritime/Misc/Buoy-Conical-Yellow.ac", "Buoy", "buoy", "marker buoy, navigation buoy", 6.4),
     "sea/red_buoy": _m("Maritime/Misc/RedBuoy.ac", "Red buoy", "buoy", "buoy, channel marker", 2.25),
