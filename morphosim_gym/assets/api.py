@@ -44,6 +44,8 @@ def conversion_key(record: AssetRecord, params: ConversionParams, files: AssetFi
     """sha256 of the source files' bytes, the record's frame fields, the parameters and the version."""
     meta = {"version": CONVERSION_VERSION, "kind": record.kind, "up": record.up_axis, "unit": record.unit_scale,
             "size": record.size_m, "rotation": record.model_rotation, "params": params.key()}
+    if record.extra.get("skip"):     # objects an AC3D record leaves out change the geometry
+        meta["skip"] = list(record.extra["skip"])
     return hashlib.sha256((json.dumps(meta, sort_keys=True) + files.content_hash()).encode()).hexdigest()
 
 

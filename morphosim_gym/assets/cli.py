@@ -23,10 +23,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add `morphosim assets` and its subcommands."""
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--assets", action="append", default=[], metavar="DIR",
-                        help="a folder of OBJ/GLB/PLY files to add (repeatable; also $MORPHOSIM_ASSETS)")
+                        help="a folder of OBJ/GLB/PLY/AC3D files to add (repeatable; also $MORPHOSIM_ASSETS)")
     common.add_argument("--sources", default=None,
                         help="comma-separated system sources to use (default all installed: "
-                             "sweethome3d,robosuite,studiolights; '' for none)")
+                             "sweethome3d,robosuite,studiolights,zero_ad,libero,flightgear; '' for none)")
     common.add_argument("--cache-dir", default=None, help="asset cache folder (default $MORPHOSIM_CACHE/assets)")
     common.add_argument("--refresh", action="store_true", help="re-read every source instead of the cached index")
     common.add_argument("--json", action="store_true", help="print JSON")

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import trimesh
 
+from .ac3d import find_texture, texture_names
 from .errors import AssetError, AssetWarning
 from .record import AssetRecord
 
@@ -158,14 +159,31 @@ class AssetFiles:
             name = os.path.join(self.folder, name)
         return self._read_exact(name)
 
+    def ac3d_texture(self, name: str) -> bytes | None:
+        """The bytes of a texture an AC3D file names, or None when it is not found: in a zip, next to
+        the file (by written path or base name); on disk, where `ac3d.find_texture` finds it."""
+        if self.record.member:
+            try:
+                return self.read(name)
+            except KeyError:
+                return None
+        path = find_texture(self.folder, name)
+        return None if path is None else self._read_exact(str(path))
+
     def content_hash(self) -> str:
         """sha256 over the main file and every file it refers to (the conversion cache's key part)."""
         main = self.main()
         h = hashlib.sha256(main)
-        if (self.record.member or self.record.path).lower().endswith(".obj"):
+        label = (self.record.member or self.record.path).lower()
+        if label.endswith(".obj"):
             for name, blob in sorted(self.references(main)):
                 h.update(name.encode())
                 h.update(hashlib.sha256(blob).digest())
+        if label.endswith(".ac"):
+            for name in texture_names(main):
+                blob = self.ac3d_texture(name)
+                h.update(name.encode())
+                h.update(hashlib.sha256(blob or b"").digest())
         texture = self.texture_member()
         if texture is not None:
             h.update(str(self.record.extra["texture"]).encode())

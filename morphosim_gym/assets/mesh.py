@@ -1,7 +1,9 @@
 """Loading a mesh asset into plain arrays: `MeshPart`s of triangles with their material.
 
 trimesh parses OBJ (with MTL and textures), GLB/GLTF and PLY; `pmd.py` reads 0 A.D.'s PMD (its
-texture named by the record's `extra["texture"]`); each part keeps its triangles in
+texture named by the record's `extra["texture"]`); `ac3d.py` reads AC3D (FlightGear), leaving out
+the objects the record's `extra["skip"]` names, its textures modulated by their material's colour
+as FlightGear draws them and their alpha kept as opacity; each part keeps its triangles in
 the file's frame (scene-graph transforms applied), per-corner UVs when it has a texture, the
 texture as float RGB, and the material's diffuse colour and opacity.
 """
@@ -16,6 +18,7 @@ from pathlib import PurePosixPath
 import numpy as np
 import trimesh
 
+from .ac3d import read_ac3d
 from .errors import AssetError, AssetWarning
 from .files import AssetFiles
 from .pmd import read_pmd
@@ -23,7 +26,7 @@ from .record import AssetRecord
 
 __all__ = ["MeshPart", "load_mesh_parts"]
 
-_FILE_TYPES = {".obj": "obj", ".glb": "glb", ".gltf": "gltf", ".ply": "ply", ".pmd": "pmd"}
+_FILE_TYPES = {".obj": "obj", ".glb": "glb", ".gltf": "gltf", ".ply": "ply", ".pmd": "pmd", ".ac": "ac3d"}
 
 
 @dataclass
@@ -37,6 +40,8 @@ class MeshPart:
         color: the diffuse colour, used without a texture. [3]
         opacity: the material's opacity in [0, 1].
         face_colors: per-face colours from the file (PLY/vertex colours), or None. [M, 3]
+        alpha: the texture's opacity, uint8, where it has transparent texels (cut-out windows),
+            else None; it multiplies `opacity` where the surface is sampled. [H, W]
     """
 
     triangles: np.ndarray
@@ -45,6 +50,7 @@ class MeshPart:
     color: np.ndarray
     opacity: float = 1.0
     face_colors: np.ndarray | None = None
+    alpha: np.ndarray | None = None
 
 
 def _rgba(value, default=(0.7, 0.7, 0.7, 1.0)) -> np.ndarray:
@@ -112,6 +118,8 @@ def load_mesh_parts(record: AssetRecord, files: AssetFiles | None = None) -> lis
     data = files.main()
     if file_type == "pmd":
         return [_pmd_part(files, data)]
+    if file_type == "ac3d":
+        return _ac3d_parts(files, data)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -148,6 +156,59 @@ def _pmd_part(files: AssetFiles, data: bytes) -> MeshPart:
     uvs = pmd.uvs[pmd.faces] if texture is not None else None     # v runs up the image, as MeshPart's
     return MeshPart(pmd.positions[pmd.faces], uvs, texture,
                     _rgba(None)[:3])
+
+
+def _ac3d_parts(files: AssetFiles, data: bytes) -> list[MeshPart]:
+    """The parts of an AC3D file, one per (texture, material); a missing or unreadable texture warns
+    once, naming it, and its parts take the material colour."""
+    try:
+        model = read_ac3d(data, files.label, tuple(files.record.extra.get("skip", ())))
+    except ValueError as exc:
+        raise AssetError(f"Cannot parse the mesh {exc}") from None
+    if model.n_triangles == 0:
+        raise AssetError(f"The mesh {files.label} has no triangles")
+    images: dict[str, tuple[np.ndarray, np.ndarray | None] | None] = {}
+    parts = []
+    for p in model.parts:
+        material = model.material(p.material)
+        rgb = np.asarray(material.rgb, dtype=np.float64).clip(0, 1)
+        image = _ac3d_texture(files, p.texture, images) if p.texture else None
+        if image is None:
+            parts.append(MeshPart(p.triangles, None, None, rgb, material.opacity))
+            continue
+        texture = (image[0] * rgb + 0.5).clip(0, 255).astype(np.uint8)   # FlightGear modulates by the material
+        parts.append(MeshPart(p.triangles, p.uvs, texture, rgb, material.opacity, alpha=image[1]))
+    return parts
+
+
+def _ac3d_texture(files: AssetFiles, name: str, images: dict) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """(RGB, alpha or None) of an AC3D part's texture; None, warned once, when missing or unreadable."""
+    if name not in images:
+        try:
+            blob = files.ac3d_texture(name)
+            if blob is None:
+                raise ValueError("not found next to the file")
+            images[name] = _decode_rgba(blob)
+        except (AssetError, OSError, ValueError) as exc:
+            warnings.warn(AssetWarning(f"Texture {name!r} of {files.label} is unreadable ({exc}); using the "
+                                       f"material colour"), stacklevel=4)
+            images[name] = None
+    return images[name]
+
+
+def _decode_rgba(blob: bytes) -> tuple[np.ndarray, np.ndarray | None]:
+    """(RGB uint8 [H, W, 3], alpha uint8 [H, W] or None when every texel is opaque) of an image file."""
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(blob)) as im:
+            rgba = np.asarray(im.convert("RGBA"), dtype=np.uint8)
+    except Exception as exc:  # noqa: BLE001 - PIL raises many types for a bad image
+        raise ValueError(f"{type(exc).__name__}: {exc}") from None
+    if rgba.ndim != 3 or rgba.shape[0] == 0 or rgba.shape[1] == 0:
+        raise ValueError("an empty image")
+    alpha = rgba[..., 3]
+    return np.ascontiguousarray(rgba[..., :3]), (np.ascontiguousarray(alpha) if alpha.min() < 255 else None)
 
 
 def _decode_image(blob: bytes | None) -> np.ndarray | None:

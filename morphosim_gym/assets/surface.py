@@ -20,7 +20,7 @@ class SurfaceSamples:
         points: positions. [N, 3]
         normals: unit face normals (from the triangles' winding). [N, 3]
         colors: RGB in [0, 1]. [N, 3]
-        opacities: the material opacity of each point's face. [N]
+        opacities: the material opacity of each point's face (times its texture's alpha, when it has one). [N]
         area: the surface's total area (the in-plane density is N / area).
     """
 
@@ -62,7 +62,7 @@ def sample_surface(parts: list[MeshPart], triangles: list[np.ndarray], n: int, s
             continue
         local = face[sel] - offsets[i]
         colors[sel] = _part_colors(part, local, bary[sel])
-        opacities[sel] = part.opacity
+        opacities[sel] = part.opacity * _part_alpha(part, local, bary[sel])
     return SurfaceSamples(points, normals, np.clip(colors, 0, 1), opacities, float(cdf[-1] / 2))
 
 
@@ -86,6 +86,14 @@ def _stratified(cdf: np.ndarray, n: int, rng: np.random.Generator) -> tuple[np.n
     r1 = np.mod(s1 + i / _R2, 1.0)
     r2 = np.mod(s2 + i / _R2**2, 1.0)
     return face, r1, r2
+
+
+def _part_alpha(part: MeshPart, faces: np.ndarray, bary: np.ndarray) -> np.ndarray | float:
+    """The texture's opacity at the samples (bilinear), or 1 for a part without texture alpha."""
+    if part.alpha is None or part.uvs is None:
+        return 1.0
+    uv = np.einsum("nk,nkd->nd", bary, part.uvs[faces])
+    return sample_texture(part.alpha[..., None], uv)[:, 0]
 
 
 def _part_colors(part: MeshPart, faces: np.ndarray, bary: np.ndarray) -> np.ndarray:

@@ -35,7 +35,7 @@ __all__ = ["ASSET_MODES", "ASSET_PREFIX", "EXCLUDED_WORDS", "SETTING_SKIES", "as
 ASSET_MODES = ("auto", "off", "require")
 ASSET_PREFIX = "asset:"
 ENV_SOURCES = "MORPHOSIM_ASSET_SOURCES"
-INSTALL_HINT = "apt install sweethome3d-furniture 0ad-data blender-data"
+INSTALL_HINT = "apt install sweethome3d-furniture 0ad-data flightgear-data-models blender-data"
 _log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
 

@@ -1,7 +1,8 @@
 """Asset sources, found at run time: each is skipped when it is not installed.
 
 `default_sources()` lists what this machine has: Sweet Home 3D furniture catalogues, robosuite's
-objects, Blender's sky panoramas, 0 A.D.'s animals and props, LIBERO's groceries and kitchenware, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
+objects, Blender's sky panoramas, 0 A.D.'s animals and props, LIBERO's groceries and kitchenware,
+FlightGear's aircraft, vehicles, ships and buildings, and the user folders (`$MORPHOSIM_ASSETS`, `asset_dirs`).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import os
 from collections.abc import Callable, Sequence
 
 from .base import AssetSource, FileStat
+from .flightgear import FlightGearSource
 from .folder import FolderSource, folders_from_env
 from .libero import LiberoSource
 from .robosuite import RobosuiteSource
@@ -21,6 +23,7 @@ __all__ = [
     "SYSTEM_SOURCES",
     "AssetSource",
     "FileStat",
+    "FlightGearSource",
     "FolderSource",
     "LiberoSource",
     "RobosuiteSource",
@@ -37,6 +40,7 @@ SYSTEM_SOURCES: dict[str, Callable[[], AssetSource | None]] = {
     StudioLightsSource.name: StudioLightsSource.discover,
     ZeroADSource.name: ZeroADSource.discover,
     LiberoSource.name: LiberoSource.discover,
+    FlightGearSource.name: FlightGearSource.discover,
 }
 
 

@@ -1,4 +1,4 @@
-"""A user folder of meshes (OBJ, GLB/GLTF, PLY) and 3DGS `.ply` files.
+"""A user folder of meshes (OBJ, GLB/GLTF, PLY, AC3D) and 3DGS `.ply` files.
 
 Folders come from `$MORPHOSIM_ASSETS` (several separated by `os.pathsep`) or `--assets DIR`.
 One up axis and unit per folder: y-up and metres (the glTF convention) unless the folder holds a
@@ -18,7 +18,7 @@ from .base import FileStat, file_stats, slug, unique_ids, warn_skip
 
 __all__ = ["ENV_VAR", "MESH_SUFFIXES", "SETTINGS_FILE", "FolderSource", "folders_from_env"]
 
-MESH_SUFFIXES = (".obj", ".glb", ".gltf", ".ply")
+MESH_SUFFIXES = (".obj", ".glb", ".gltf", ".ply", ".ac")
 ENV_VAR = "MORPHOSIM_ASSETS"
 SETTINGS_FILE = "morphosim_assets.json"
 _SETTINGS = {"up_axis": str, "unit_scale": (int, float), "licence": str}

@@ -184,8 +184,19 @@ def _next_phrase_starts(toks: Sequence[str], j: int, collected: list[int], known
     w = toks[j]
     if collected and w in DETS and w not in ("all", "every", "each"):
         return True  # an article starts the next phrase ("a retriever fetches a ball")
-    # after a known noun only another known noun continues the phrase ("table lamp")
-    return known_head and noun_to_category(w) is None
+    # after a known noun only another known noun continues the phrase ("table lamp"), or the rest
+    # of a compound WordNet knows that names another thing ("an aircraft carrier" is no aircraft)
+    return known_head and noun_to_category(w) is None and not _other_thing_compound(toks, j, collected)
+
+
+def _other_thing_compound(toks: Sequence[str], j: int, collected: list[int]) -> bool:
+    """Whether the vocabulary noun before j and the word at j (no verb: "the bus stops") are a
+    compound WordNet knows that is not a kind of the noun's category ("aircraft carrier", "jet bridge")."""
+    w, prev = toks[j], toks[j - 1]
+    if not collected or collected[-1] != j - 1 or w in VERBS or w in AUX:
+        return False
+    cat = noun_to_category(prev)
+    return cat is not None and compound_noun(prev, w) and hypernyms.names_other_thing(f"{prev} {w}", cat[0])
 
 
 def _colour_is_modifier(after: str | None, np_: NounPhrase, edit: bool) -> bool:
