@@ -182,7 +182,12 @@ def _text_senses(text: str, tags: tuple[str, ...] = ()) -> tuple[wordnet.Synset,
             return compound[:1]
     senses = ranked_senses(head)
     named = {"_".join(t.lower().split()) for t in tags}
-    return tuple(x for x in senses if named & set(x.lemmas))[:1] or senses[:1]
+    tagged = tuple(x for x in senses if named & set(x.lemmas))[:1]
+    if not tagged and named and head:
+        # a tag may name a sense that is no visible thing in WordNet: 0 A.D.'s "Dragon" tagged
+        # "firedrake" is the mythical dragon, not the flying lizard (its only visible sense)
+        tagged = tuple(x for x in wordnet.senses(head) if named & set(x.lemmas))[:1]
+    return tagged or senses[:1]
 
 
 def related(noun: str, text: str, max_depth: int = MAX_ASSET_DEPTH, tags: tuple[str, ...] = ()) -> bool | None:

@@ -121,6 +121,15 @@ def test_zero_ad_animals_resolve_by_name(real):
         assert parse(f"a {noun}").objects[0].category.startswith("asset:zero_ad/"), noun
 
 
+def test_a_lizard_is_not_the_fantasy_dragon(real):
+    # 0 A.D.'s Dragon is the mythical one (tagged "firedrake"): "a dragon" names it, "a lizard" does not
+    from morphosim_gym.assets.sources import ZeroADSource
+    if ZeroADSource.discover() is None:
+        pytest.skip("needs Debian 0ad-data")
+    assert parse("a dragon").objects[0].category == "asset:zero_ad/fauna/dragon"
+    assert parse("a lizard").objects[0].category != "asset:zero_ad/fauna/dragon"
+
+
 def _first(text):
     return parse(text).objects[0]
 

@@ -95,6 +95,15 @@ def test_a_candidate_is_read_through_its_dominant_sense():
 
 
 @needs_wordnet
+def test_a_tag_may_name_a_sense_that_is_no_visible_thing():
+    # the mythical dragon is an imaginary being in WordNet, the flying lizard its only visible sense:
+    # an asset "Dragon" tagged "firedrake" is the mythical one, so a lizard is no kind of it
+    assert hypernyms.related("lizard", "Dragon") is True                       # untagged: the flying lizard
+    assert hypernyms.related("lizard", "Dragon", tags=("animal", "firedrake")) is False
+    assert hypernyms.related("lizard", "Monitor", tags=("monitor lizard",)) is True   # a visible sense named by a tag
+
+
+@needs_wordnet
 def test_ly_nouns_are_not_adverbs():
     assert is_adverb("slowly") and is_adverb("steadily")
     assert not is_adverb("butterfly") and not is_adverb("dragonfly")

@@ -37,7 +37,7 @@ UNIT_SCALE = 0.4          # metres per 0 A.D. unit
 MAX_MEMBER_BYTES = 16 * 1024 * 1024
 
 # actor stem (art/actors/fauna/<stem>.xml) -> (name, category, tags); category is one of the
-# generator's when the animal is a kind of it, else "animal"
+# generator's when the animal is a kind of it, else "animal" ("monster" for the dragon)
 FAUNA: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "arctic_wolf": ("Arctic wolf", "animal", ("wolf", "canine")),
     "bear_brown": ("Brown bear", "animal", ("bear",)),
@@ -52,7 +52,8 @@ FAUNA: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "crow": ("Crow", "bird", ("raven",)),
     "deer": ("Deer", "animal", ("stag",)),
     "donkey": ("Donkey", "animal", ("ass",)),       # no "mule": a mule is a hybrid, no kind of donkey
-    "dragon": ("Dragon", "animal", ("monster",)),
+    "dragon": ("Dragon", "monster", ("mythical monster", "firedrake")),   # the winged fantasy dragon: "firedrake"
+    # names WordNet's mythical sense of "dragon", not its only visible one, the flying lizard ("a lizard")
     "elephant_african_bush": ("African elephant", "elephant", ()),
     "elephant_asian": ("Asian elephant", "elephant", ()),
     "fish_generic": ("Fish", "fish", ()),
