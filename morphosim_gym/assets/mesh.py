@@ -212,19 +212,9 @@ def _decode_rgba(blob: bytes) -> tuple[np.ndarray, np.ndarray | None]:
 
 
 def _decode_image(blob: bytes | None) -> np.ndarray | None:
-    """RGB uint8 of an image file's bytes (DDS with DXT1/3/5 included, by Pillow)."""
-    if blob is None:
-        return None
-    from PIL import Image
-
-    try:
-        with Image.open(io.BytesIO(blob)) as im:
-            arr = np.asarray(im.convert("RGB"), dtype=np.uint8)
-    except Exception as exc:  # noqa: BLE001 - PIL raises many types for a bad image
-        raise ValueError(f"{type(exc).__name__}: {exc}") from None
-    if arr.ndim != 3 or arr.shape[0] == 0 or arr.shape[1] == 0:
-        raise ValueError("an empty image")
-    return arr
+    """RGB uint8 of an image file's bytes (DDS with DXT1/3/5 included, by Pillow): `_decode_rgba`'s
+    colour channels."""
+    return None if blob is None else _decode_rgba(blob)[0]
 
 
 def _world_meshes(scene: trimesh.Scene) -> list[trimesh.Trimesh]:
