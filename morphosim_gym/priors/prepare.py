@@ -12,10 +12,12 @@ from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
 from .sizes import planned_sizes
 
-__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "prepare_priors", "setting_label"]
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "prepare_priors", "setting_label", "open_sky"]
 
 PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
+#: Settings closed by walls: what a frame shows above the horizon is a backdrop near the scene.
+CLOSED_SETTINGS = ("table", "indoor")
 
 
 def _carried(clip: GeneratedClip, name: str = "") -> str:
@@ -36,6 +38,14 @@ def setting_label(clip: GeneratedClip) -> str:
 
     s = clip.info.get("setting")
     return (word_to_setting(str(s).lower()) or str(s)) if s else "ground"
+
+
+def open_sky(clip: GeneratedClip) -> bool:
+    """Whether what the clip shows above the ground's horizon is sky (far beyond the scene: left
+    empty, so the reconstruction makes it the scene's sky) rather than a backdrop (part of the
+    setting): sky unless the plan names a setting closed by walls (`CLOSED_SETTINGS`)."""
+    s = clip.info.get("setting")
+    return not (s and setting_label(clip) in CLOSED_SETTINGS)
 
 
 def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -71,7 +81,8 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
         return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
-    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip))
+    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip),
+                                                                        backdrop=not open_sky(clip))
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:

@@ -158,6 +158,16 @@ def _median_filter(z: np.ndarray, radius: int = 2) -> np.ndarray:
     return out
 
 
+def _fill_gaps(z: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """[T] series with its NaN entries interpolated linearly in time between the finite ones
+    (held at the ends); `fallback` where no entry is finite."""
+    ok = np.isfinite(z)
+    if not ok.any():
+        return fallback
+    t = np.arange(len(z))
+    return np.interp(t, t[ok], z[ok])
+
+
 def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Sequence[Camera],
                   size: ObjectSize | None = None, lifted_ratio: float = 1.35,
                   contact_percentile: float = 10.0, lift_rows: int = 8) -> np.ndarray:
@@ -167,7 +177,8 @@ def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Seq
     and flyers take the size depth; others the contact, unless they touch no ground or the contact is
     `lifted_ratio` times farther than the size says (off the ground there: the ground seen just
     under a thing in the air lies behind it; only for a mask of at least `lift_rows` rows, where
-    a pixel of mask error moves the size depth by little)."""
+    a pixel of mask error moves the size depth by little). A swimmer's or flyer's frames without a
+    size depth take it interpolated from its other frames (`_fill_gaps`), not the contact."""
     t = len(masks)
     contact = np.full(t, np.nan)
     by_size = np.full(t, np.nan)
@@ -187,6 +198,8 @@ def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Seq
         return contact
     by_size = _median_filter(by_size)
     if size.mobility in ("swim", "air"):
-        return np.where(np.isfinite(by_size), by_size, contact)
+        # no ground under a swimmer or a flyer: where its size says nothing (another object
+        # beside it), its depth goes on smoothly from the frames where it does
+        return np.where(np.isfinite(by_size), by_size, _fill_gaps(by_size, contact))
     lifted = np.isfinite(by_size) & (~np.isfinite(contact) | (tall & (contact > lifted_ratio * by_size)))
     return np.where(lifted, by_size, contact)

@@ -11,6 +11,7 @@ from tqdm.auto import tqdm
 
 from ..render import rasterize
 from ..scene import GeneratedClip
+from ..scene.sky import sky_background
 from ..priors import prior_confidences
 from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_iou_loss, mask_loss, photometric_loss, psnr_torch,
                      scale_shift_depth_loss, smooth_motion_loss, track_loss)
@@ -173,8 +174,11 @@ def _track_targets(clip: GeneratedClip, model: DynamicGaussians, reference: dict
 
 
 def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int], dynamic: dict[int, bool],
-        config: FitConfig | None = None, seed: int = 0, background: tuple[float, float, float] = (0, 0, 0)) -> dict:
-    """Optimise `model` in place against the clip. Returns a log (losses, PSNR, timings)."""
+        config: FitConfig | None = None, seed: int = 0, background: tuple[float, float, float] = (0, 0, 0),
+        sky: np.ndarray | None = None) -> dict:
+    """Optimise `model` in place against the clip. Returns a log (losses, PSNR, timings).
+    With a `sky` image (`reconstruct.sky`) each frame's renders are composited over the sky
+    seen along its rays instead of the `background` colour, as the fitted scene renders."""
     cfg = config or FitConfig()
     torch.manual_seed(seed)
     gen = torch.Generator().manual_seed(seed)
@@ -185,6 +189,9 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
     invariant_depth = cfg.w_depth_invariant > 0 and depth_origin != "ground_truth"
     scene_depth = float(np.median(clip.depth[clip.depth > 0]))
     bg = torch.tensor(background, dtype=torch.float32)
+    behind = None if sky is None else torch.as_tensor(np.stack([sky_background(sky, c) for c in clip.cameras]))
+    if behind is not None:
+        bg = torch.zeros(3)
     # footprint of each Gaussian (initial pixel size), for densification thresholds
     footprint = model.scales().detach().max(dim=-1).values.clone()
     inst_index = {inst: k for k, inst in enumerate(data.instance_ids)}
@@ -234,6 +241,8 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
                         data.Ks[t:t + 1], data.W, data.H, features=onehot, background=bg,
                         nears=data.nears[t:t + 1], backend=cfg.backend)
         rgb, depth, alpha, soft = out["rgb"][0], out["depth"][0], out["alpha"][0], out["features"][0]
+        if behind is not None:
+            rgb = rgb + (1.0 - alpha)[..., None] * behind[t]
         target = data.rgb[t]
         loss = photometric_loss(rgb, target, cfg.w_ssim)
         conf_t = None if data.mask_weight is None else data.mask_weight[t]

@@ -38,11 +38,12 @@ from .fit import FitConfig, fit
 from .initialize import InitConfig, initialize
 from .labels import with_prompt_objects
 from .lifting import estimate_background_color
+from .sky import sky_from_clip
 from .video_labels import video_estimators
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 9      # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 10     # bumped when the method changes, so older results are fitted again
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,9 @@ class ReconstructionConfig:
         complete: add Gaussians for what the input view never saw (ground beyond the view,
             the far side of objects).
         complete_iterations: fit iterations after completion (blend the added ground in).
+        sky: give the scene a sky image made from the pixels the priors leave empty (no depth,
+            no instance: `reconstruct.sky`), fitted behind the Gaussians; False: those pixels
+            show the background colour.
         seed: random seed (same clip, config and seed: the same scene).
         cache: load / store results in `cache_dir` (default `$MORPHOSIM_CACHE/reconstruct`).
         cache_dir: cache location, or None for the default.
@@ -68,6 +72,7 @@ class ReconstructionConfig:
     priors: str = "auto"
     complete: bool = True
     complete_iterations: int = 200
+    sky: bool = True
     seed: int = 0
     cache: bool = True
     cache_dir: str | None = None
@@ -153,7 +158,8 @@ def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
     init = initialize(clip, cfg.init, seed=cfg.seed)
     model = init.model
     background = estimate_background_color(clip)
-    fit_log = fit(model, clip, init.reference, init.dynamic, fit_cfg, seed=cfg.seed, background=background)
+    sky = sky_from_clip(clip) if cfg.sky else None
+    fit_log = fit(model, clip, init.reference, init.dynamic, fit_cfg, seed=cfg.seed, background=background, sky=sky)
     if cfg.complete:
         from .completion import complete
 
@@ -165,7 +171,7 @@ def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
             polish = replace(fit_cfg, iterations=cfg.complete_iterations,
                              strategy=replace(fit_cfg.strategy, refine_start=cfg.complete_iterations + 1))
             fit_log["complete"] = fit(model, clip, init.reference, init.dynamic, polish, seed=cfg.seed + 1,
-                                      background=background)
+                                      background=background, sky=sky)
     decoders, feat_log = distill_features(model, clip, feat_cfg, seed=cfg.seed)
     gaussians, motion = model.to_scene_parts()
     ids = sorted(int(i) for i in np.unique(clip.masks) if i >= 0)
@@ -179,7 +185,7 @@ def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
                     (clip.cameras[0],), decoders=decoders,
                     provenance=Provenance(clip.prompt or None, clip.info.get("seed"), clip.info.get("backend", "clip"),
                                           f"fit:{cache_key(source, cfg)}"),
-                    background=background)
+                    background=background, sky=sky)
     scene._fit_log = {"fit": fit_log, "features": feat_log, "seconds": seconds,  # for reports (not saved)
                       "priors": clip.info["priors"]}
     return scene

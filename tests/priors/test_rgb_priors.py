@@ -81,6 +81,21 @@ def test_a_clip_of_frames_and_cameras_gets_every_prior_estimated():
         prepare_priors(clip, "oracle")
 
 
+def test_above_the_horizon_is_sky_outdoors_and_a_backdrop_indoors():
+    frames, boxes = _moving_square()
+    cam = _camera()
+    up = (slice(None), slice(0, 3))                # the top rows look above the horizon
+    trajectories = {"bus": {"boxes": (boxes * [64, 48, 64, 48]).tolist()}}
+    outdoor = prepare_priors(GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0,
+                                           info={"trajectories": trajectories, "setting": "road"}))
+    # left empty (no depth, no instance): the reconstruction makes it the scene's sky
+    assert np.all(outdoor.depth[up] == 0) and np.all(outdoor.masks[up] == -1)
+    indoor = prepare_priors(GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0,
+                                          info={"trajectories": {"cup": trajectories["bus"]}, "setting": "table"}))
+    # a wall closes an indoor view: the setting, as far as the farthest ground seen
+    assert np.all(indoor.depth[up] > 0) and np.all(indoor.masks[up] == 0)
+
+
 def test_bad_priors_name_the_field():
     frames, _ = _moving_square()
     cam = _camera()

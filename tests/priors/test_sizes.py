@@ -83,6 +83,26 @@ def test_a_swimmer_takes_its_depth_from_its_size():
     assert np.allclose(lifted, expect)
 
 
+def test_a_swimmer_beside_another_object_keeps_its_depth_from_its_other_frames():
+    # frames 0-4: another object right beside the fish hides its outline, so its size says
+    # nothing there; its depth goes on from frames 5-8, never the far ground contact
+    cam = _camera()
+    m, ground = _drawn(cam, 6.0, 1.0)
+    m = np.roll(m, -8, axis=0)
+    masks = np.where(m, 1, 0)[None].repeat(9, 0)
+    cols = np.flatnonzero(m.any(axis=0))
+    for i in range(5):
+        masks[i][m.any(axis=1), cols[-1] + 1:cols[-1] + 6] = 2     # the neighbour, right of it
+    grounds = ground[None].repeat(9, 0)
+    thin = ObjectSize(1.0, 0.01, "swim")
+    z = object_depths(masks, 1, grounds, [cam] * 9, thin)
+    expect = size_depth(m, cam, thin)
+    assert size_depth(masks[0] == 1, cam, thin, blocked=masks[0] == 2) is None
+    assert np.allclose(z, expect)
+    contact = object_depths(masks, 1, grounds, [cam] * 9, None)
+    assert np.all(contact > 1.5 * expect)
+
+
 def test_contact_takes_the_nearest_feet():
     # a sheep-like mask: a body with two legs reaching lower; the legs' contact is the object's
     cam = _camera()
