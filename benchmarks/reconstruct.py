@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Reconstruction quality and time on the generator's example prompts (issue #5 bars).
 
-    python benchmarks/reconstruct.py [--prompts all|paper] [--size 128] [--frames 49] [--iterations 1200] [--json out.json]
+    python benchmarks/reconstruct.py [--prompts all|paper | --prompts-file F] [--size 128] [--frames 49] [--iterations 1200] [--json out.json]
                                      [--priors ground_truth|estimated|corrupted] [--only WORDS]...
 
 --priors says where the fit's depth, masks and tracks come from (printed in every row):
@@ -78,6 +78,9 @@ def row(r: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--prompts", choices=("all", "paper"), default="all")
+    ap.add_argument("--prompts-file", type=Path, default=None,
+                    help="prompts to run instead, one per line (# comments), e.g. "
+                         "benchmarks/reconstruct_heldout_prompts.txt")
     ap.add_argument("--only", action="append", default=None, metavar="WORDS",
                     help="keep only the prompts containing these words (repeatable)")
     ap.add_argument("--size", type=int, default=128)
@@ -93,6 +96,9 @@ def main() -> None:
     ap.add_argument("--cache-dir", default=None, help="where fitted scenes are left (default: the package cache)")
     args = ap.parse_args()
     prompts = EXAMPLE_PROMPTS if args.prompts == "all" else tuple(p for p, _ in PAPER_SCENES)
+    if args.prompts_file:
+        lines = (ln.strip() for ln in args.prompts_file.read_text().splitlines())
+        prompts = tuple(ln for ln in lines if ln and not ln.startswith("#"))
     if args.only:
         prompts = tuple(p for p in prompts if any(w.lower() in p.lower() for w in args.only))
     config = ReconstructionConfig(progress=False, cache_dir=args.cache_dir, priors=PRIOR_CONFIG[args.priors])

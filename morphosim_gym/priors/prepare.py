@@ -31,21 +31,31 @@ def _carried(clip: GeneratedClip, name: str = "") -> str:
     return str(said) if said and not isinstance(said, dict) else "clip"
 
 
+#: Settings whose background object the generator names otherwise than the setting.
+_SETTING_OBJECT_NAMES = {"indoor": "floor"}
+
+
 def setting_label(clip: GeneratedClip) -> str:
-    """The setting's object name: the plan's setting word in its canonical form ("underwater" ->
-    "water", the name the generator gives that background), "ground" without one."""
+    """The setting's object name: the plan's setting word in its canonical form, named as the
+    generator names that background ("underwater" -> "water", "room" -> "floor"), "ground"
+    without one."""
     from ..language.vocabulary import word_to_setting
 
     s = clip.info.get("setting")
-    return (word_to_setting(str(s).lower()) or str(s)) if s else "ground"
+    if not s:
+        return "ground"
+    name = word_to_setting(str(s).lower()) or str(s)
+    return _SETTING_OBJECT_NAMES.get(name, name)
 
 
 def open_sky(clip: GeneratedClip) -> bool:
     """Whether what the clip shows above the ground's horizon is sky (far beyond the scene: left
     empty, so the reconstruction makes it the scene's sky) rather than a backdrop (part of the
     setting): sky unless the plan names a setting closed by walls (`CLOSED_SETTINGS`)."""
+    from ..language.vocabulary import word_to_setting
+
     s = clip.info.get("setting")
-    return not (s and setting_label(clip) in CLOSED_SETTINGS)
+    return not (s and (word_to_setting(str(s).lower()) or str(s)) in CLOSED_SETTINGS)
 
 
 def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:

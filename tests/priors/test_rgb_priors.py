@@ -180,3 +180,14 @@ def test_still_planned_objects_are_found_by_colour():
     info = {"plan": {"objects": [{"name": "cube"}, {"name": "plate"}],
                      "motions": [{"target": "cube", "path": "straight"}]}, "setting": "underwater"}
     assert static_plan_labels(info) == ["plate", "seaweed"]
+
+
+def test_the_setting_is_named_as_the_generator_names_its_background():
+    from morphosim_gym.generate.settings import SETTING_NAMES, build_setting
+    from morphosim_gym.priors import setting_label
+
+    frames, _ = _moving_square(t=2)
+    for name in SETTING_NAMES:
+        clip = GeneratedClip(frames=frames, cameras=(_camera(),) * 2, fps=8.0, info={"setting": name})
+        built = build_setting(name, 5.0, np.random.default_rng(0), budget=200)
+        assert setting_label(clip) == built.label, name
