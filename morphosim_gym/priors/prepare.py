@@ -12,12 +12,15 @@ from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
 from .sizes import planned_sizes
 
-__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "prepare_priors", "setting_label", "open_sky"]
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "GROUNDLESS_SETTINGS", "prepare_priors", "setting_label",
+           "open_sky", "setting_word"]
 
 PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
 #: Settings closed by walls: what a frame shows above the horizon is a backdrop near the scene.
 CLOSED_SETTINGS = ("table", "indoor")
+#: Settings up in the air: no ground near enough to see as one; everything but the objects is sky.
+GROUNDLESS_SETTINGS = ("sky",)
 
 
 def _carried(clip: GeneratedClip, name: str = "") -> str:
@@ -39,23 +42,23 @@ def setting_label(clip: GeneratedClip) -> str:
     """The setting's object name: the plan's setting word in its canonical form, named as the
     generator names that background ("underwater" -> "water", "room" -> "floor"), "ground"
     without one."""
+    name = setting_word(clip)
+    return "ground" if name is None else _SETTING_OBJECT_NAMES.get(name, name)
+
+
+def setting_word(clip: GeneratedClip) -> str | None:
+    """The plan's setting in its canonical form ("field" -> "grass"), None without one."""
     from ..language.vocabulary import word_to_setting
 
     s = clip.info.get("setting")
-    if not s:
-        return "ground"
-    name = word_to_setting(str(s).lower()) or str(s)
-    return _SETTING_OBJECT_NAMES.get(name, name)
+    return (word_to_setting(str(s).lower()) or str(s)) if s else None
 
 
 def open_sky(clip: GeneratedClip) -> bool:
     """Whether what the clip shows above the ground's horizon is sky (far beyond the scene: left
     empty, so the reconstruction makes it the scene's sky) rather than a backdrop (part of the
     setting): sky unless the plan names a setting closed by walls (`CLOSED_SETTINGS`)."""
-    from ..language.vocabulary import word_to_setting
-
-    s = clip.info.get("setting")
-    return not (s and (word_to_setting(str(s).lower()) or str(s)) in CLOSED_SETTINGS)
+    return setting_word(clip) not in CLOSED_SETTINGS
 
 
 def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -91,8 +94,9 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
         return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
-    est = estimators if estimators is not None else RGBPriorEstimators(setting_label=setting_label(clip),
-                                                                        backdrop=not open_sky(clip))
+    est = estimators if estimators is not None else RGBPriorEstimators(
+        setting_label=setting_label(clip), backdrop=not open_sky(clip),
+        ground=setting_word(clip) not in GROUNDLESS_SETTINGS)
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:

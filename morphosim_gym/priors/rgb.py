@@ -54,6 +54,9 @@ class RGBPriorEstimators:
         backdrop: pixels above the horizon are part of the setting, at the depth of the farthest
             ground seen (a backdrop: a generated frame draws something there); False leaves them
             unknown (depth 0, mask -1).
+        ground: the frames show a ground plane at `ground_height`; False (a scene up in the sky,
+            whose frames show no ground near enough to tell from the sky): every pixel outside
+            the objects is left unknown (depth 0, mask -1), and objects take their size depth.
     """
 
     ground_height: float = 0.0
@@ -65,6 +68,7 @@ class RGBPriorEstimators:
     backdrop: bool = True
     lifted_ratio: float = 1.35
     contact_percentile: float = 10.0
+    ground: bool = True
 
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
@@ -78,7 +82,9 @@ class RGBPriorEstimators:
         t = len(frames)
         cams = self._cameras(camera, t)
         out = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) for c in cams])
-        if self.backdrop:
+        if not self.ground:
+            out = np.zeros_like(out)
+        elif self.backdrop:
             # above the horizon: a backdrop as far as the farthest ground seen
             far = float(out.max()) if np.any(out > 0) else self.max_depth
             out = np.where(out > 0, out, far).astype(np.float32)
@@ -107,7 +113,9 @@ class RGBPriorEstimators:
         fg = motion_foreground(f, cameras, targets, self.ground_height, self.box_margin)
         ids, labels = label_regions(fg, targets, self.box_margin, frames=f)
         ids = ids.copy()
-        if cameras is not None and not self.backdrop:
+        if not self.ground:
+            below = np.zeros((t, h, w), bool)
+        elif cameras is not None and not self.backdrop:
             below = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) > 0
                               for c in self._cameras(cameras, t)])
         else:

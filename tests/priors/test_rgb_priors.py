@@ -191,3 +191,17 @@ def test_the_setting_is_named_as_the_generator_names_its_background():
         clip = GeneratedClip(frames=frames, cameras=(_camera(),) * 2, fps=8.0, info={"setting": name})
         built = build_setting(name, 5.0, np.random.default_rng(0), budget=200)
         assert setting_label(clip) == built.label, name
+
+
+def test_up_in_the_sky_everything_but_the_objects_is_sky():
+    frames, boxes = _moving_square()
+    cam = _camera()
+    info = {"trajectories": {"bird": {"boxes": (boxes * [64, 48, 64, 48]).tolist()}}, "setting": "sky",
+            "plan": {"objects": [{"name": "bird", "category": "bird", "scale": 1.0}]}}
+    out = prepare_priors(GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0, info=info))
+    bird = out.masks == 1
+    assert bird.any() and set(np.unique(out.masks[~bird]).tolist()) == {-1}   # no ground: no setting
+    assert np.all(out.depth[~bird] == 0) and np.all(out.depth[bird] > 0)
+    # on a road the lower rows are the setting, on the ground plane
+    road = prepare_priors(GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0, info={**info, "setting": "road"}))
+    assert np.all(road.masks[:, -5:][road.masks[:, -5:] != 1] == 0) and np.all(road.depth[:, -5:] > 0)
