@@ -53,6 +53,9 @@ class InitConfig:
             "it does not move": a small object whose tracks the flow drags along with the
             background, or that noise pushed off its mask (static objects stay under ~3 px,
             mask errors of +-2 px move a centroid little).
+        coverage_margin: a moving instance starts from its mask's translation instead of its
+            tracks' rigid poses when that lands this much more of its reference points on its
+            masks (`_coverage`, mean over the frames where the mask is seen).
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -65,6 +68,7 @@ class InitConfig:
     static_pixels: float = 2.0
     noise_factor: float = 3.0
     mask_pixels: float = 5.0
+    coverage_margin: float = 0.1
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -154,6 +158,23 @@ def _mask_residual(clip: GeneratedClip, instance: int, reference: int, trans: np
     return float(np.percentile(err, 75.0))
 
 
+def _coverage(clip: GeneratedClip, instance: int, points: np.ndarray, rots: np.ndarray, trans: np.ndarray,
+              seen: np.ndarray) -> float:
+    """Mean share, over the frames where the instance's mask is `seen`, of its reference points
+    [n, 3] that the poses (rotations [T, 3, 3], translations [T, 3]) land inside its mask."""
+    shares = []
+    for t in np.flatnonzero(seen):
+        if not len(points):
+            break
+        uv, z = clip.cameras[t].project(points @ rots[t].T + trans[t])
+        c, r = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
+        ok = (z > 0) & (c >= 0) & (c < clip.width) & (r >= 0) & (r < clip.height)
+        hit = np.zeros(len(points), bool)
+        hit[ok] = clip.masks[t][r[ok], c[ok]] == instance
+        shares.append(hit.mean())
+    return float(np.mean(shares)) if shares else 0.0
+
+
 def _decide_motion(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, scene_depth: float,
                    ) -> tuple[bool, tuple[np.ndarray, np.ndarray]]:
     """Whether an instance is dynamic, and its per-frame rigid poses (rotations [T, 3, 3],
@@ -171,6 +192,14 @@ def _decide_motion(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, sc
     if good.sum() >= 2:
         travel = np.linalg.norm(np.einsum("tij,j->ti", rots, centre) + trans - centre, axis=1).max()
         if travel > cfg.motion_threshold * scene_depth and static_residual(clip, inst, ref) > limit:
+            # the tracks' rigid poses, unless the mask's own translation lands the object on its
+            # masks clearly better (tracks lifted onto a flat depth, or dragged by the flow, give a
+            # rolling ball a wrong rotation and a fish a lagging path)
+            mtrans, seen = mask_motion(clip, inst, ref)
+            eye = np.tile(np.eye(3), (clip.num_frames, 1, 1))
+            if _coverage(clip, inst, pts.points, eye, mtrans, seen) > \
+                    _coverage(clip, inst, pts.points, rots, trans, seen) + cfg.coverage_margin:
+                return True, (eye, mtrans)
             return True, (rots, trans)
     # the tracks do not show it moving (too few of them, or dragged along with the background
     # by the flow): the mask's own motion decides (translation only)
