@@ -8,7 +8,7 @@ sky, the same pixels are seen along every camera ray at infinity, in input views
 and the envs alike.
 
 Each empty pixel's colour is splatted (bilinear weights, the adjoint of `scene.sky.sky_colors`'s
-lookup) onto the panorama along its ray, averaged per texel, and texels no ray reached are
+lookup) onto the panorama along its ray (`scene.sky.texel_coords`), averaged per texel, and texels no ray reached are
 filled from the seen ones by pull-push (a coarse-to-fine average: the sky beside what was seen
 continues its colours). The panorama's angular resolution is twice the finest camera's, so that
 looking it up again blurs the input views by little.
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..scene import GeneratedClip
 from ..scene.camera import Camera
-from ..scene.sky import check_sky, sky_rays
+from ..scene.sky import check_sky, sky_rays, texel_coords
 
 __all__ = ["empty_pixels", "estimate_sky", "sky_from_clip", "pull_push", "MIN_SKY_PIXELS"]
 
@@ -77,7 +77,7 @@ def estimate_sky(frames: np.ndarray, cameras: Sequence[Camera], mask: np.ndarray
         rows, cols = np.nonzero(mask[t])
         if not len(rows):
             continue
-        u, v = _panorama_coords(sky_rays(cam, rows, cols), w, h)
+        u, v = texel_coords(sky_rays(cam, rows, cols), w, h)
         colour = frames[t][rows, cols].astype(np.float64) * scale
         u0, v0 = np.floor(u), np.floor(v)
         fu, fv = u - u0, v - v0
@@ -91,14 +91,6 @@ def estimate_sky(frames: np.ndarray, cameras: Sequence[Camera], mask: np.ndarray
                 np.add.at(acc[:, c], idx, wt * colour[:, c])
     sky = pull_push(acc.reshape(h, w, 3), wsum.reshape(h, w))
     return check_sky(np.clip(sky, 0.0, 1.0).astype(np.float32))
-
-
-def _panorama_coords(directions: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous texel coordinates (u, v) of world directions, as `scene.sky.sky_colors` looks them up."""
-    d = directions / np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-12)
-    u = (0.5 - np.arctan2(d[:, 1], d[:, 0]) / (2 * np.pi)) * w - 0.5
-    v = np.clip((0.5 - np.arcsin(np.clip(d[:, 2], -1, 1)) / np.pi) * h - 0.5, 0, h - 1)
-    return u, v
 
 
 def pull_push(weighted: np.ndarray, weight: np.ndarray) -> np.ndarray:

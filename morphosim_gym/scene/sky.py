@@ -10,7 +10,7 @@ import numpy as np
 
 from .camera import Camera
 
-__all__ = ["check_sky", "sky_background", "sky_colors", "sky_rays", "composite_sky", "SKY_VISIBLE_BELOW"]
+__all__ = ["check_sky", "sky_background", "sky_colors", "texel_coords", "sky_rays", "composite_sky", "SKY_VISIBLE_BELOW"]
 
 #: Pixels with alpha at or above this show no sky: (1 - alpha) x 1 is under half a uint8 step there.
 SKY_VISIBLE_BELOW = 0.999
@@ -28,14 +28,20 @@ def check_sky(image: object) -> np.ndarray:
     return a
 
 
-def sky_colors(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
-    """Bilinear sky colour along each world direction. [N, 3] -> float32 [N, 3]"""
-    d = np.asarray(directions, dtype=np.float32)
-    d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-    h, w = image.shape[:2]
+def texel_coords(directions: np.ndarray, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous texel coordinates (u, v) of world directions [N, 3] in a w x h sky image (the
+    lookup of `sky_colors`; v clipped to the rows), in the directions' float precision."""
+    d = directions / np.maximum(np.linalg.norm(directions, axis=1, keepdims=True), 1e-12)
     u = (np.float32(0.5) - np.arctan2(d[:, 1], d[:, 0]) * np.float32(1 / (2 * np.pi))) * w - np.float32(0.5)
     v = np.clip((np.float32(0.5) - np.arcsin(np.clip(d[:, 2], -1, 1)) * np.float32(1 / np.pi)) * h - np.float32(0.5),
                 0, h - 1)
+    return u, v
+
+
+def sky_colors(image: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Bilinear sky colour along each world direction. [N, 3] -> float32 [N, 3]"""
+    h, w = image.shape[:2]
+    u, v = texel_coords(np.asarray(directions, dtype=np.float32), w, h)
     u0, v0 = np.floor(u), np.floor(v)
     fu, fv = (u - u0)[:, None], (v - v0)[:, None]
     u0 = u0.astype(np.int64) % w
