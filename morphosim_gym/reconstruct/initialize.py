@@ -8,7 +8,8 @@
   setting instance (`unlabelled_host`);
 * static instances are fused from several frames into one point set (a voxel per pixel
   footprint), dynamic ones are brought back to their reference frame (where their mask
-  is largest) with the per-frame rigid poses estimated from tracks (Kabsch, robust);
+  is largest) with the per-frame rigid poses estimated from tracks (Kabsch, robust), or from
+  the mask's own motion, turned by the spin its pixels show (`spin`: a rolling ball);
 * each dynamic instance gets a scaffold of nodes (k-means over its canonical points),
   all starting with the instance's rigid motion; Gaussians are flat discs facing the
   camera they were seen from, one per pixel footprint, with the pixel's colour.
@@ -26,6 +27,7 @@ from ..scene.rotations import normal_quats
 from .lifting import (PointSet, backproject, instance_motion, instance_tracks, interior_mask, mask_motion,
                       static_residual, track_noise, voxel_downsample)
 from .model import DynamicGaussians
+from .spin import spin_angles, spin_poses
 
 __all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
 
@@ -56,6 +58,13 @@ class InitConfig:
         coverage_margin: a moving instance starts from its mask's translation instead of its
             tracks' rigid poses when that lands this much more of its reference points on its
             masks (`_coverage`, mean over the frames where the mask is seen).
+        spin: a moving instance whose own pixels show it turning steadily about the line of
+            sight (`spin.spin_angles`: a rolling ball, whose small textured disc the flow's
+            tracks see mostly translating) takes that turn as its rotation, pivoting on its
+            centre along the chosen path, when: ECC measured at least `spin_measured` of the frame
+            pairs where its mask is seen, with a median correlation >= `spin_correlation`; the
+            turns add up to >= `spin_degrees`; and they are consistent (|mean| over its standard
+            error >= `spin_consistency`: a sheep's walking legs give turns of either sign).
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -69,6 +78,11 @@ class InitConfig:
     noise_factor: float = 3.0
     mask_pixels: float = 5.0
     coverage_margin: float = 0.1
+    spin: bool = True
+    spin_measured: float = 0.75
+    spin_correlation: float = 0.95
+    spin_degrees: float = 30.0
+    spin_consistency: float = 10.0
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -175,8 +189,39 @@ def _coverage(clip: GeneratedClip, instance: int, points: np.ndarray, rots: np.n
     return float(np.mean(shares)) if shares else 0.0
 
 
+def _spun(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, centre: np.ndarray,
+          poses: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The poses with the instance's spin about the line of sight as their rotation (its centre
+    kept on the poses' path), when its pixels show a steady turn (`InitConfig.spin`); else as given."""
+    if not cfg.spin or clip.num_frames < 3:
+        return poses
+    angles, ok, corr = spin_angles(clip, inst)
+    present = (clip.masks == inst).reshape(clip.num_frames, -1).any(1)
+    pairs = int((present[:-1] & present[1:]).sum())
+    if ok.sum() < max(2, cfg.spin_measured * pairs) or np.median(corr[ok]) < cfg.spin_correlation:
+        return poses
+    a = angles[ok]
+    spread = a.std() / np.sqrt(len(a))
+    if abs(a.sum()) < np.radians(cfg.spin_degrees) or abs(a.mean()) < cfg.spin_consistency * spread:
+        return poses
+    rots, trans = poses
+    path = np.einsum("tij,j->ti", rots, centre) + trans - centre      # where the centre goes
+    return spin_poses(clip, ref, centre, path, angles)
+
+
 def _decide_motion(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, scene_depth: float,
                    ) -> tuple[bool, tuple[np.ndarray, np.ndarray]]:
+    """Whether an instance is dynamic, and its per-frame rigid poses (rotations [T, 3, 3],
+    translations [T, 3]) relative to its reference frame (`_moving`, then `_spun`)."""
+    dynamic, poses = _moving(clip, inst, ref, cfg, scene_depth)
+    if not dynamic:
+        return dynamic, poses
+    pts = backproject(clip, ref, select=clip.masks[ref] == inst)
+    return True, _spun(clip, inst, ref, cfg, pts.points.mean(0) if len(pts) else np.zeros(3), poses)
+
+
+def _moving(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, scene_depth: float,
+            ) -> tuple[bool, tuple[np.ndarray, np.ndarray]]:
     """Whether an instance is dynamic, and its per-frame rigid poses (rotations [T, 3, 3],
     translations [T, 3]) relative to its reference frame (see `InitConfig`)."""
     label = clip.labels.get(inst, "")
