@@ -64,7 +64,9 @@ class InitConfig:
             centre along the chosen path, when: ECC measured at least `spin_measured` of the frame
             pairs where its mask is seen, with a median correlation >= `spin_correlation`; the
             turns add up to >= `spin_degrees`; and they are consistent (|mean| over its standard
-            error >= `spin_consistency`: a sheep's walking legs give turns of either sign).
+            error >= `spin_consistency`: a sheep's walking legs give turns of either sign); unless
+            the poses already turn it by at least `spin_kept` of that (median over the frames
+            turned by more than 10 degrees: exact tracks see the turn, about its true axis).
         points_per_node: scaffold density (one node per this many canonical points).
         max_nodes: at most this many nodes per dynamic instance.
         slots: nodes each Gaussian is skinned to.
@@ -83,6 +85,7 @@ class InitConfig:
     spin_correlation: float = 0.95
     spin_degrees: float = 30.0
     spin_consistency: float = 10.0
+    spin_kept: float = 0.5
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -206,7 +209,17 @@ def _spun(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, centre: np.
         return poses
     rots, trans = poses
     path = np.einsum("tij,j->ti", rots, centre) + trans - centre      # where the centre goes
-    return spin_poses(clip, ref, centre, path, angles)
+    spun = spin_poses(clip, ref, centre, path, angles)
+    turn, own = _turn_angles(spun[0]), _turn_angles(rots)
+    far = turn > np.radians(10.0)
+    if far.any() and np.median(own[far] / turn[far]) >= cfg.spin_kept:
+        return poses            # the tracks saw the turn: their rotations keep its true axis
+    return spun
+
+
+def _turn_angles(rots: np.ndarray) -> np.ndarray:
+    """[T] angle (radians) of each rotation [T, 3, 3]."""
+    return np.arccos(np.clip((np.trace(rots, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0))
 
 
 def _decide_motion(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, scene_depth: float,

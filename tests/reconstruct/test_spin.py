@@ -129,6 +129,11 @@ def test_a_rolling_ball_starts_turning_as_it_rolls(ball_clip):
     # measured: 35 degrees with the spin (its axis is the line of sight, the true one the ground's
     # horizontal, 20 degrees apart; ECC reads 80% of the turn at 64 px), 101 without
     assert error(spun) < 45 and error(plain) > 2 * error(spun)
+    # with the generator's exact tracks the tracks see the turn, about its true axis: kept
+    exact = initialize(clip, seed=0).instance_poses[truth]
+    kept = initialize(clip, InitConfig(spin=False), seed=0).instance_poses[truth]
+    np.testing.assert_array_equal(exact[0], kept[0])
+    assert _turn_deg(exact[0][0] @ exact[0][8].T) > 60
 
 
 def test_an_object_that_does_not_turn_keeps_its_poses():
