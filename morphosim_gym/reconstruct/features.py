@@ -172,6 +172,10 @@ class FeatureConfig:
         clip_path: local directory of a CLIP model, or None.
         backend: renderer.
         progress: tqdm bar.
+        fill_unseen: Gaussians whose latents no supervised pixel reached (an object's far side
+            or underside added by completion, Gaussians hidden behind others in every frame)
+            take the mean latent of their `fill_neighbours` nearest supervised Gaussians, instead
+            of keeping their colour-only start (which decodes as whatever shares their colour).
     """
 
     dim: int = 32
@@ -185,6 +189,8 @@ class FeatureConfig:
     clip_path: str | None = None
     backend: str = "cpu"
     progress: bool = True
+    fill_unseen: bool = True
+    fill_neighbours: int = 8
 
 
 def _encoders(cfg: FeatureConfig) -> list:
@@ -276,6 +282,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
         scales, opac, colors = model.scales().detach(), model.opacities().detach(), model.colors().detach()
     order: list[int] = []
     losses = []
+    reached = np.zeros(model.num)           # how much supervision each Gaussian's latent received
     bar = tqdm(range(cfg.iterations), desc="feature field", disable=not cfg.progress, leave=False)
     for it in bar:
         if not order:
@@ -301,10 +308,36 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
                 loss = loss + ((pred - target.reshape(-1, target.shape[-1])[idx]) ** 2).mean()
         opt.zero_grad(set_to_none=True)
         loss.backward()
+        if model.features.grad is not None:
+            reached += model.features.grad.detach().abs().sum(1).numpy().astype(np.float64)
         opt.step()
         if it % 25 == 0:
             losses.append(loss.item())
             bar.set_postfix(loss=f"{loss.item():.4f}")
+    filled = _fill_unseen(model, reached, cfg.fill_neighbours, T // 2) if cfg.fill_unseen else 0
     exported = {e.name: dec.export(e.name, e.normalize) for e, dec in zip(encs, decoders)}
-    return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations}
+    return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations,
+                      "filled": filled}
+
+
+def _fill_unseen(model: DynamicGaussians, reached: np.ndarray, k: int, frame: int, floor: float = 1e-3) -> int:
+    """Give each Gaussian whose latent received almost no supervision (`reached` <= `floor` x the
+    median of those that received any) the mean latent of its `k` nearest supervised Gaussians at
+    `frame`; returns how many were filled."""
+    from scipy.spatial import cKDTree
+
+    some = reached[reached > 0]
+    if some.size == 0:
+        return 0
+    unseen = reached <= floor * float(np.median(some))
+    if not unseen.any() or unseen.all():
+        return 0
+    with torch.no_grad():
+        means = model.warp(frame)[0].detach().numpy().astype(np.float64)
+        latents = model.features.detach().numpy()
+        _, nearest = cKDTree(means[~unseen]).query(means[unseen], k=min(k, int((~unseen).sum())))
+        nearest = nearest.reshape(int(unseen.sum()), -1)
+        filled = latents[~unseen][nearest].mean(1)
+        model.features.data[torch.from_numpy(np.flatnonzero(unseen))] = torch.as_tensor(filled, dtype=torch.float32)
+    return int(unseen.sum())
 
