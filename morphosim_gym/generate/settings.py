@@ -16,6 +16,7 @@ import numpy as np
 
 from typing import Sequence
 
+from ..language.vocabulary import SETTING_LAYOUTS
 from ..scene import Camera
 from ..scene.lighting import AMBIENT, DIFFUSE, LIGHT_DIR
 from ..scene.parts import SurfaceCloud
@@ -178,19 +179,19 @@ def build_setting(name: str, radius: float, rng: np.random.Generator, budget: in
     cams = list(cameras) if cameras else None
     if name == "ground":
         cloud = _ground(rng, budget, radius, (0.58, 0.55, 0.5), 2.0, 0.12, cameras=cams)
-        return Setting(name, cloud, sky, label="ground")
+        return Setting(name, cloud, sky, label=SETTING_LAYOUTS[name].label)
     if name == "grass":
         g = _ground(rng, int(budget * 0.88), radius, (0.3, 0.55, 0.2), 2.5, 0.25, patches=(0.36, 0.5, 0.18),
                     cameras=cams)
         hills = _backdrop(rng, int(budget * 0.12), far * 0.8, radius * 2.0, radius * 0.12, (0.25, 0.45, 0.22))
-        return Setting(name, _merge([g, hills]), sky, label="grass")
+        return Setting(name, _merge([g, hills]), sky, label=SETTING_LAYOUTS[name].label)
     if name == "snow":
         g = _ground(rng, int(budget * 0.88), radius, (0.93, 0.95, 0.98), 1.5, 0.06, cameras=cams)
         hills = _backdrop(rng, int(budget * 0.12), far * 0.8, radius * 2.0, radius * 0.2, (0.85, 0.88, 0.95))
-        return Setting(name, _merge([g, hills]), (0.7, 0.8, 0.92), label="snow")
+        return Setting(name, _merge([g, hills]), (0.7, 0.8, 0.92), label=SETTING_LAYOUTS[name].label)
     if name == "sand":
         g = _ground(rng, budget, radius, (0.86, 0.76, 0.55), 3.0, 0.12, cameras=cams)
-        return Setting(name, g, (0.68, 0.82, 0.95), label="sand")
+        return Setting(name, g, (0.68, 0.82, 0.95), label=SETTING_LAYOUTS[name].label)
     if name == "road":
         g = _ground(rng, int(budget * 0.9), radius, (0.34, 0.52, 0.24), 2.0, 0.2, cameras=cams)
         road_w = max(3.5, radius * 0.12)
@@ -203,14 +204,14 @@ def build_setting(name: str, radius: float, rng: np.random.Generator, budget: in
         edge = asphalt & (np.abs(np.abs(y) - road_w * 0.45) < road_w * 0.025)
         col[dash | edge] = [0.9, 0.9, 0.86]
         hills = _backdrop(rng, int(budget * 0.1), far * 0.8, radius * 2.0, radius * 0.1, (0.3, 0.45, 0.28))
-        return Setting(name, _merge([_colored(g, col), hills]), sky, label="road")
+        return Setting(name, _merge([_colored(g, col), hills]), sky, label=SETTING_LAYOUTS[name].label)
     if name == "water":
         g = _ground(rng, budget, radius, (1.0, 1.0, 1.0), 4.0, 0.0, cameras=cams)
         p = g.means
         waves = 0.5 + 0.5 * np.sin(p[:, 0] * 3.0 + np.sin(p[:, 1] * 1.7) * 2.0)
         col = np.c_[0.12 + 0.1 * waves, 0.35 + 0.12 * waves, 0.55 + 0.12 * waves] * _noise(p, rng, 4.0, 0.08)[:, None]
         g.opacities[:] = 0.96
-        return Setting(name, _colored(g, col), sky, water_level=setting_levels(name)["water_level"], label="water")
+        return Setting(name, _colored(g, col), sky, water_level=setting_levels(name)["water_level"], label=SETTING_LAYOUTS[name].label)
     if name == "underwater":
         floor = _ground(rng, int(budget * 0.8), radius, (0.78, 0.72, 0.55), 3.0, 0.15, cameras=cams)
         floor.colors = np.clip(floor.colors * [0.75, 0.95, 1.0], 0, 1)       # water tint
@@ -219,21 +220,21 @@ def build_setting(name: str, radius: float, rng: np.random.Generator, budget: in
                   rng.uniform(0.1, 3.0, n_p)]
         particles = _flat(p, np.full(n_p, 0.02), np.tile([0.75, 0.9, 0.92], (n_p, 1)), rng, opacity=0.35, shade=False)
         return Setting(name, _merge([floor, particles]), (0.12, 0.45, 0.55),
-                       swim_height=setting_levels(name)["swim_height"], label="water")
+                       swim_height=setting_levels(name)["swim_height"], label=SETTING_LAYOUTS[name].label)
     if name == "table":
         top = _ground(rng, int(budget * 0.8), radius * 0.6, (0.6, 0.42, 0.26), 1.0, 0.05, cameras=cams)
         grain = 0.88 + 0.12 * np.sin(top.means[:, 0] * 25.0 + np.sin(top.means[:, 1] * 3.0) * 2.0)
         top.colors = np.clip(top.colors * grain[:, None], 0, 1)
         wall = _backdrop(rng, int(budget * 0.2), radius * 0.55, radius * 2.0, radius * 0.6, (0.85, 0.82, 0.76),
                          z0=-radius * 0.2, hills=False, noise=0.03)
-        return Setting(name, _merge([top, wall]), (0.8, 0.78, 0.74), label="table")
+        return Setting(name, _merge([top, wall]), (0.8, 0.78, 0.74), label=SETTING_LAYOUTS[name].label)
     if name == "indoor":
         floor = _ground(rng, int(budget * 0.75), radius * 0.7, (0.62, 0.45, 0.3), 1.0, 0.06, cameras=cams)
         planks = 0.85 + 0.15 * ((floor.means[:, 0] * 4.0) % 1.0 > 0.05)
         floor.colors = np.clip(floor.colors * planks[:, None], 0, 1)
         wall = _backdrop(rng, int(budget * 0.25), radius * 0.6, radius * 2.0, radius * 0.5, (0.9, 0.88, 0.82),
                          hills=False, noise=0.03)
-        return Setting(name, _merge([floor, wall]), (0.85, 0.84, 0.8), label="floor")
+        return Setting(name, _merge([floor, wall]), (0.85, 0.84, 0.8), label=SETTING_LAYOUTS[name].label)
     # sky: only clouds far away; objects fly
     n = budget
     clumps = rng.integers(0, 12, n)
@@ -241,7 +242,8 @@ def build_setting(name: str, radius: float, rng: np.random.Generator, budget: in
     c = centres[clumps] + rng.normal(size=(n, 3)) * [radius * 0.08, radius * 0.03, radius * 0.02]
     clouds = _flat(c, np.full(n, radius * 0.03), np.tile([0.97, 0.97, 0.99], (n, 1)), rng, normal=(0.0, -1.0, 0.0),
                    opacity=0.55, shade=False)
-    return Setting(name, clouds, (0.45, 0.65, 0.92), air_height=setting_levels(name)["air_height"], label="sky")
+    return Setting(name, clouds, (0.45, 0.65, 0.92), air_height=setting_levels(name)["air_height"],
+                   label=SETTING_LAYOUTS["sky"].label)
 
 
 def carve_under(cloud: SurfaceCloud, base: np.ndarray, spacing: float) -> SurfaceCloud:

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Category", "CATEGORIES", "SETTINGS", "SETTING_WORDS", "DEFAULT_SETTING", "category_names",
+__all__ = ["Category", "CATEGORIES", "SETTINGS", "SETTING_WORDS", "DEFAULT_SETTING", "SettingLayout", "SETTING_LAYOUTS",
+           "category_names",
            "setting_names", "noun_to_category", "word_to_setting", "singular", "is_plural_form"]
 
 
@@ -119,6 +120,37 @@ SETTINGS: dict[str, tuple[str, ...]] = {
     "indoor": ("indoor", "indoors", "room", "living", "bedroom", "hall", "office"),
 }
 DEFAULT_SETTING = "ground"
+
+
+@dataclass(frozen=True)
+class SettingLayout:
+    """What a setting puts around the objects: what the generator builds and reconstruction reads.
+
+    Attributes:
+        label: the name of the setting's background object in a scene ("indoor" -> "floor").
+        walls: closed by walls: what a frame shows above the horizon is a backdrop near the
+            scene, not a sky (no sky panorama; estimated priors keep it as part of the setting).
+        ground: a ground plane near enough to be seen as one (False up in the sky: everything
+            but the objects is sky).
+    """
+
+    label: str
+    walls: bool = False
+    ground: bool = True
+
+
+SETTING_LAYOUTS: dict[str, SettingLayout] = {
+    "water": SettingLayout("water"),
+    "underwater": SettingLayout("water"),       # the generator's water seen from below the surface
+    "road": SettingLayout("road"),
+    "table": SettingLayout("table", walls=True),
+    "snow": SettingLayout("snow"),
+    "grass": SettingLayout("grass"),
+    "sky": SettingLayout("sky", ground=False),
+    "ground": SettingLayout("ground"),
+    "sand": SettingLayout("sand"),
+    "indoor": SettingLayout("floor", walls=True),
+}
 
 SETTING_WORDS: dict[str, str] = {w: s for s, words in SETTINGS.items() for w in words}
 

@@ -6,6 +6,7 @@ import inspect
 from dataclasses import replace
 from typing import Any
 
+from ..language.vocabulary import SETTING_LAYOUTS
 from ..scene import GeneratedClip
 from .masks import plan_targets, static_plan_labels
 from .protocol import PriorEstimators
@@ -18,9 +19,9 @@ __all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "GROUNDLESS_SETTIN
 PRIOR_NAMES = ("depth", "masks", "tracks")
 PRIOR_SOURCES = ("auto", "estimated", "ground_truth")
 #: Settings closed by walls: what a frame shows above the horizon is a backdrop near the scene.
-CLOSED_SETTINGS = ("table", "indoor")
+CLOSED_SETTINGS = tuple(n for n, layout in SETTING_LAYOUTS.items() if layout.walls)
 #: Settings up in the air: no ground near enough to see as one; everything but the objects is sky.
-GROUNDLESS_SETTINGS = ("sky",)
+GROUNDLESS_SETTINGS = tuple(n for n, layout in SETTING_LAYOUTS.items() if not layout.ground)
 
 
 def _carried(clip: GeneratedClip, name: str = "") -> str:
@@ -34,16 +35,15 @@ def _carried(clip: GeneratedClip, name: str = "") -> str:
     return str(said) if said and not isinstance(said, dict) else "clip"
 
 
-#: Settings whose background object the generator names otherwise than the setting.
-_SETTING_OBJECT_NAMES = {"indoor": "floor"}
-
-
 def setting_label(clip: GeneratedClip) -> str:
     """The setting's object name: the plan's setting word in its canonical form, named as the
     generator names that background ("underwater" -> "water", "room" -> "floor"), "ground"
     without one."""
     name = setting_word(clip)
-    return "ground" if name is None else _SETTING_OBJECT_NAMES.get(name, name)
+    if name is None:
+        return "ground"
+    layout = SETTING_LAYOUTS.get(name)
+    return layout.label if layout is not None else name
 
 
 def setting_word(clip: GeneratedClip) -> str | None:

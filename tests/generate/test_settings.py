@@ -72,3 +72,17 @@ def test_the_table_never_shows_through_the_plate():
 def test_an_object_above_the_ground_hides_nothing():
     ground = _ground()
     assert len(carve_under(ground, _disc(0.14, 0.01) + [0.0, 0.0, 0.5], 0.01)) == len(ground)
+
+
+def test_walled_settings_get_no_sky_and_open_ones_may():
+    # one table (language.vocabulary.SETTING_LAYOUTS) says which settings are closed by walls: the
+    # generator gives them no sky panorama, and reconstruction keeps their backdrop (priors.prepare)
+    from morphosim_gym.generate.real_assets import SETTING_SKIES
+    from morphosim_gym.generate.settings import SETTING_NAMES
+    from morphosim_gym.language.vocabulary import SETTING_LAYOUTS
+    from morphosim_gym.priors.prepare import CLOSED_SETTINGS
+
+    assert set(SETTING_LAYOUTS) == set(SETTING_NAMES)
+    assert set(CLOSED_SETTINGS) == {n for n, layout in SETTING_LAYOUTS.items() if layout.walls} == {"table", "indoor"}
+    assert not set(SETTING_SKIES) & set(CLOSED_SETTINGS)
+    assert set(SETTING_SKIES) | set(CLOSED_SETTINGS) | {"underwater"} == set(SETTING_NAMES)
