@@ -312,7 +312,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
                 loss = loss + ((pred - target.reshape(-1, target.shape[-1])[idx]) ** 2).mean()
         opt.zero_grad(set_to_none=True)
         loss.backward()
-        if model.features.grad is not None:
+        if cfg.fill_unseen and model.features.grad is not None:
             reached += model.features.grad.detach().abs().sum(1).numpy().astype(np.float64)
         opt.step()
         if it % 25 == 0:

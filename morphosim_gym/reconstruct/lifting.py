@@ -12,7 +12,7 @@ import numpy as np
 
 from ..scene import Camera, GeneratedClip
 
-__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "mask_motion", "voxel_downsample", "interior_mask",
+__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "mask_motion", "off_border", "voxel_downsample", "interior_mask",
            "estimate_background_color"]
 
 
@@ -165,6 +165,12 @@ def instance_tracks(clip: GeneratedClip, instance: int, tolerance: float | None 
     return np.flatnonzero(own)
 
 
+def off_border(mask: np.ndarray) -> bool:
+    """Whether a mask [H, W] stays off the image border (one cut by the border changes shape as
+    the object moves, so its centroid and its pixels mislead)."""
+    return not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+
+
 def mask_motion(clip: GeneratedClip, instance: int, reference: int, min_pixels: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Track-free motion of an instance: per-frame world translations [T, 3] of the centroid of
     its lifted mask relative to the reference frame, and a [T] bool of frames where the mask
@@ -176,7 +182,7 @@ def mask_motion(clip: GeneratedClip, instance: int, reference: int, min_pixels: 
 
     def centroid(t: int) -> np.ndarray | None:
         m = (clip.masks[t] == instance) & (clip.depth[t] > 0)
-        if m.sum() < min_pixels or m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any():
+        if m.sum() < min_pixels or not off_border(m):
             return None
         rows, cols = np.nonzero(m)
         uv = np.stack([cols + 0.5, rows + 0.5], -1).astype(np.float64)

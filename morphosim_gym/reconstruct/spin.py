@@ -6,7 +6,7 @@ Aligning the object's pixels in consecutive frames with a Euclidean warp (ECC, i
 reads the in-image rotation directly; chained from a reference frame, those angles become 3D
 rotations about the ray from the camera to the object, pivoting on the object's centre.
 
-Only the clip's frames, masks, depth prior and cameras are read (never `clip.ground_truth`).
+Only the clip's frames, masks and cameras are read (never `clip.ground_truth`).
 """
 
 from __future__ import annotations
@@ -15,14 +15,9 @@ import cv2
 import numpy as np
 
 from ..scene import GeneratedClip
+from .lifting import off_border
 
-__all__ = ["spin_angles", "spin_poses", "texture_agreement"]
-
-
-def _inside(mask: np.ndarray, min_pixels: int) -> bool:
-    """Enough pixels, away from the image border (a mask cut by the border changes shape)."""
-    return bool(mask.sum() >= min_pixels and not (mask[0].any() or mask[-1].any() or mask[:, 0].any()
-                                                    or mask[:, -1].any()))
+__all__ = ["spin_angles", "spin_poses"]
 
 
 def spin_angles(clip: GeneratedClip, instance: int, min_pixels: int = 24, iterations: int = 100,
@@ -44,7 +39,7 @@ def spin_angles(clip: GeneratedClip, instance: int, min_pixels: int = 24, iterat
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, int(iterations), 1e-5)
     for k in range(T - 1):
         m0, m1 = clip.masks[k] == instance, clip.masks[k + 1] == instance
-        if not (_inside(m0, min_pixels) and _inside(m1, min_pixels)):
+        if not all(m.sum() >= min_pixels and off_border(m) for m in (m0, m1)):
             continue
         inner = cv2.erode(m0.astype(np.uint8), kernel)
         if inner.sum() < min_pixels // 2:
@@ -86,33 +81,3 @@ def spin_poses(clip: GeneratedClip, reference: int, centre: np.ndarray, trans: n
         rots[k] = _about(ray(k), -angles[k]) @ rots[k + 1]
     # the centre follows its own path: x_t = R_t (x - c) + c + trans_t
     return rots, c + trans - np.einsum("tij,j->ti", rots, c)
-
-
-def texture_agreement(clip: GeneratedClip, instance: int, points: np.ndarray, colors: np.ndarray,
-                      rots: np.ndarray, trans: np.ndarray, frames: np.ndarray) -> float:
-    """How well the poses carry an instance's texture: the mean, over the given frames, of the
-    correlation between the grey values of its reference points [n, 3] (colours [n, 3] in 0..1)
-    and of the pixels the poses land them on, counting the points that land on the instance's
-    mask there (`_coverage` judges the landing itself). Mean colours do not count (a red ball
-    turned the wrong way is still red): near 1 when the pattern lines up, near 0 for a uniform
-    object whatever the poses; 0 where fewer than 8 points land."""
-    grey = colors @ _GREY
-    scores = []
-    for t in frames:
-        uv, z = clip.cameras[t].project(points @ rots[t].T + trans[t])
-        c, r = np.floor(uv[:, 0]).astype(int), np.floor(uv[:, 1]).astype(int)
-        ok = (z > 0) & (c >= 0) & (c < clip.width) & (r >= 0) & (r < clip.height)
-        hit = np.zeros(len(points), bool)
-        hit[ok] = clip.masks[t][r[ok], c[ok]] == instance
-        if hit.sum() < 8:
-            scores.append(0.0)
-            continue
-        a = grey[hit] - grey[hit].mean()
-        b = clip.frames[t][r[hit], c[hit]].astype(np.float64) / 255.0 @ _GREY
-        b = b - b.mean()
-        den = np.sqrt((a * a).sum() * (b * b).sum())
-        scores.append(float((a * b).sum() / den) if den > 1e-12 else 0.0)
-    return float(np.mean(scores)) if scores else 0.0
-
-
-_GREY = np.array([0.299, 0.587, 0.114])
