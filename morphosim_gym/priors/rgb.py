@@ -10,7 +10,8 @@ import numpy as np
 
 from ..scene.camera import Camera
 from .depth import contact_depth, ground_plane_depth
-from .masks import _box_masks, label_regions, motion_foreground, static_regions
+from .colour_refine import refine_by_colour
+from .masks import _box_masks, label_regions, motion_foreground, static_regions, still_camera
 from .protocol import BoxTrack
 from .sizes import ObjectSize, size_depth
 from .tracks import flow_tracks
@@ -69,6 +70,7 @@ class RGBPriorEstimators:
     lifted_ratio: float = 1.35
     contact_percentile: float = 10.0
     ground: bool = True
+    colour_refine: bool = True
 
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
@@ -140,6 +142,15 @@ class RGBPriorEstimators:
             labels = {**labels, **{first + k: str(n) for k, n in enumerate(static_labels)}}
         ids[ids == 0] = -1
         ids[setting] = SETTING_ID
+        if self.colour_refine and setting.any():
+            still = None
+            if cameras is None or still_camera(cameras):
+                # unchanged against a background model that saw the pixel free of every planned
+                # box in enough frames (a slow mug's own pixels are in its box in all of them)
+                boxed = np.stack([np.any(_box_masks(targets, i, h, w, self.box_margin), axis=0) if targets
+                                  else np.zeros((h, w), bool) for i in range(t)])
+                still = ~fg & ((~boxed).sum(axis=0) >= max(1, 0.2 * t))[None]
+            ids = refine_by_colour(f, ids, SETTING_ID, movers=range(1, len(targets) + 1), still=still)
         if setting.any():
             labels = {SETTING_ID: self.setting_label, **labels}
         present = set(np.unique(ids).tolist())

@@ -64,7 +64,11 @@ class InitConfig:
             centre along the chosen path, when: ECC measured at least `spin_measured` of the frame
             pairs where its mask is seen, with a median correlation >= `spin_correlation`; the
             turns add up to >= `spin_degrees`; and they are consistent (|mean| over its standard
-            error >= `spin_consistency`: a sheep's walking legs give turns of either sign); unless
+            error >= `spin_consistency`: a sheep's walking legs give turns of either sign); the
+            rotation explains the pixels: the median over the pairs of ECC's residual (1 - its
+            correlation) without rotation over that with it is >= `spin_gain` (a rolling ball:
+            ~2.5; a sliding mug whose mask holds the table seen through its handle: ~0.2, its
+            rotation only a worse fit found by the search); unless
             the poses already turn it by at least `spin_kept` of that (median over the frames
             turned by more than 10 degrees: exact tracks see the turn, about its true axis).
         points_per_node: scaffold density (one node per this many canonical points).
@@ -86,6 +90,7 @@ class InitConfig:
     spin_degrees: float = 30.0
     spin_consistency: float = 10.0
     spin_kept: float = 0.5
+    spin_gain: float = 1.5
     points_per_node: int = 600
     max_nodes: int = 6
     slots: int = 4
@@ -198,10 +203,12 @@ def _spun(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, centre: np.
     kept on the poses' path), when its pixels show a steady turn (`InitConfig.spin`); else as given."""
     if not cfg.spin or clip.num_frames < 3:
         return poses
-    angles, ok, corr = spin_angles(clip, inst)
+    angles, ok, corr, still = spin_angles(clip, inst)
     present = (clip.masks == inst).reshape(clip.num_frames, -1).any(1)
     pairs = int((present[:-1] & present[1:]).sum())
     if ok.sum() < max(2, cfg.spin_measured * pairs) or np.median(corr[ok]) < cfg.spin_correlation:
+        return poses
+    if np.median((1.0 - still[ok]) / np.maximum(1.0 - corr[ok], 1e-9)) < cfg.spin_gain:
         return poses
     a = angles[ok]
     spread = a.std() / np.sqrt(len(a))

@@ -21,19 +21,23 @@ __all__ = ["spin_angles", "spin_poses"]
 
 
 def spin_angles(clip: GeneratedClip, instance: int, min_pixels: int = 24, iterations: int = 100,
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """In-image rotation (radians, image x towards image y) of an instance from each frame k to
     k + 1 ([T - 1]), and which pairs were measured ([T - 1] bool): ECC with a Euclidean warp of
     frame k's grey pixels inside the instance's mask onto frame k + 1, started from the mask
-    centroids' shift, and ECC's correlation coefficient of each pair ([T - 1], 0 where not
-    measured). Pairs where the mask is small or touches the border, or ECC does not converge,
-    are not measured (angle 0)."""
+    centroids' shift; ECC's correlation coefficient of each pair ([T - 1], 0 where not
+    measured); and that of the same alignment without rotation (a translation warp; [T - 1]),
+    which tells a real turn (the rotation aligns the pixels far better) from a warp that found
+    a rotation to trade off something else (still background seen through a mug's handle).
+    Pairs where the mask is small or touches the border, or either ECC does not converge, are
+    not measured (angle 0)."""
     T = clip.num_frames
     angles = np.zeros(max(T - 1, 0))
     ok = np.zeros(max(T - 1, 0), bool)
     corr = np.zeros(max(T - 1, 0))
+    still = np.zeros(max(T - 1, 0))
     if clip.masks is None or T < 2:
-        return angles, ok, corr
+        return angles, ok, corr, still
     gray = [cv2.cvtColor(np.ascontiguousarray(f), cv2.COLOR_RGB2GRAY).astype(np.float32) for f in clip.frames]
     kernel = np.ones((3, 3), np.uint8)
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, int(iterations), 1e-5)
@@ -44,14 +48,17 @@ def spin_angles(clip: GeneratedClip, instance: int, min_pixels: int = 24, iterat
         inner = cv2.erode(m0.astype(np.uint8), kernel)
         if inner.sum() < min_pixels // 2:
             continue
-        warp = np.eye(2, 3, dtype=np.float32)
-        warp[:, 2] = np.argwhere(m1).mean(0)[::-1] - np.argwhere(m0).mean(0)[::-1]
+        start = np.eye(2, 3, dtype=np.float32)
+        start[:, 2] = np.argwhere(m1).mean(0)[::-1] - np.argwhere(m0).mean(0)[::-1]
         try:
-            rho, warp = cv2.findTransformECC(gray[k], gray[k + 1], warp, cv2.MOTION_EUCLIDEAN, criteria, inner, 3)
+            rho, warp = cv2.findTransformECC(gray[k], gray[k + 1], start.copy(), cv2.MOTION_EUCLIDEAN, criteria,
+                                             inner, 3)
+            rho_t, _ = cv2.findTransformECC(gray[k], gray[k + 1], start.copy(), cv2.MOTION_TRANSLATION, criteria,
+                                            inner, 3)
         except cv2.error:           # no convergence (a uniform patch): not measured
             continue
-        angles[k], ok[k], corr[k] = float(np.arctan2(warp[1, 0], warp[0, 0])), True, float(rho)
-    return angles, ok, corr
+        angles[k], ok[k], corr[k], still[k] = float(np.arctan2(warp[1, 0], warp[0, 0])), True, float(rho), float(rho_t)
+    return angles, ok, corr, still
 
 
 def _about(axis: np.ndarray, angle: float) -> np.ndarray:
