@@ -117,7 +117,8 @@ def _object_models(labs: Sequence[np.ndarray], odd: Sequence[np.ndarray | None],
 def refine_by_colour(frames: np.ndarray, ids: np.ndarray, setting_id: int = 0, margin: float = 0.25,
                      min_margin: int = 2, centres: int = 3, odd_sigmas: float = 3.0, min_odd: float = 8.0,
                      samples_per_frame: int = 400, min_area: int = 4, switch: float = 0.5, passes: int = 3,
-                     movers: Sequence[int] = (), still: np.ndarray | None = None, seed: int = 0) -> np.ndarray:
+                     movers: Sequence[int] = (), still: np.ndarray | None = None, distinct: float = 20.0,
+                     seed: int = 0) -> np.ndarray:
     """[T, H, W] ids with objects' masks corrected by colour (see the module docstring).
 
     Args:
@@ -130,8 +131,10 @@ def refine_by_colour(frames: np.ndarray, ids: np.ndarray, setting_id: int = 0, m
         centres: colour centres per object.
         odd_sigmas, min_odd: a pixel stands out from the setting when its Lab distance to the
             row's setting colour exceeds max(`min_odd`, `odd_sigmas` x the setting's spread).
-        switch: a pixel of one object goes to another only when its colour is nearer the other's
-            by this factor (two white sheep keep their pixels).
+        switch, distinct: a pixel of one object goes to another only when its colour is nearer
+            the other's by this factor, and only between objects whose colours can be told apart:
+            some centre of one lies farther than `distinct` (Lab) from every centre of the other
+            (two white sheep keep their split, however their speckles fall).
         movers, still: the ids of moving objects, and [T, H, W] bool the pixels a still camera
             saw unchanged through the clip (its background model's): no moving object takes
             those from the setting (a road's lane markings beside a white bus).
@@ -158,11 +161,12 @@ def refine_by_colour(frames: np.ndarray, ids: np.ndarray, setting_id: int = 0, m
     if not models:
         return out
     movers = set(int(m) for m in movers)
+    alike = _alike(models, distinct)
     for i, lab in enumerate(labs):
         if d_set[i] is None:
             continue
         frame = _Frame(lab=lab, d_set=d_set[i], odd=odd[i], d_obj={o: _nearest(lab, c) for o, c in models.items()},
-                       held=None if still is None else still[i])
+                       held=None if still is None else still[i], alike=alike)
         for _ in range(passes):
             new = _refine_frame(frame, out[i], setting_id, margin, min_margin, switch, movers, min_area)
             if np.array_equal(new, out[i]):
@@ -180,6 +184,22 @@ class _Frame:
     odd: np.ndarray                 # [H, W] bool: stands out from the setting
     d_obj: dict                     # object id -> [H, W] distance to its nearest colour centre
     held: np.ndarray | None         # [H, W] bool: seen unchanged by a still camera
+    alike: dict                     # object id -> ids of the objects whose colours are too close to tell apart
+
+
+def _alike(models: dict[int, np.ndarray], distinct: float) -> dict[int, set[int]]:
+    """Per object, the objects whose colour centres all lie within `distinct` of the other's
+    (symmetric Hausdorff distance between the centre sets)."""
+    out: dict[int, set[int]] = {o: set() for o in models}
+    for o, a in models.items():
+        for j, b in models.items():
+            if j <= o:
+                continue
+            d = np.sqrt(((a[:, None] - b[None]) ** 2).sum(-1))
+            if max(d.min(1).max(), d.min(0).max()) < distinct:
+                out[o].add(j)
+                out[j].add(o)
+    return out
 
 
 def _nearest(lab: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -221,7 +241,7 @@ def _refine_frame(fr: _Frame, ids: np.ndarray, setting_id: int, margin: float, m
             local = colour_centres(fr.lab[ring], np.ones(int(ring.sum())), 3)
             near_setting = zone & setting
             closed[near_setting] |= _nearest(fr.lab[near_setting], local) <= d_o[near_setting]
-        closed |= objs & (ids != o) & (d_o >= switch * own_d)
+        closed |= objs & (ids != o) & ((d_o >= switch * own_d) | np.isin(ids, sorted(fr.alike.get(o, ()))))
         d = np.where(zone & ~closed, d_o, np.inf)
         take = d < best_d
         best = np.where(take, o, best)

@@ -87,6 +87,25 @@ def test_pixels_switch_objects_only_when_the_colours_clearly_differ():
     np.testing.assert_array_equal(out[(ids == 1) | (ids == 2)], ids[(ids == 1) | (ids == 2)])
 
 
+def test_speckled_look_alikes_keep_their_split():
+    """Two sheep of the same speckled fleece: a speckle can lie nearer the other sheep's colour
+    centres than its own, but the two fleeces cannot be told apart, so no pixel changes sheep."""
+    frames = _ground()
+    rng = np.random.default_rng(3)
+    back = np.zeros(frames.shape[:3], bool)
+    front = np.zeros(frames.shape[:3], bool)
+    back[:, 6:18, 10:34] = True
+    front[:, 16:30, 12:36] = True
+    fleece = np.clip(rng.normal(200, 30, frames.shape[:3] + (1,)), 0, 255).repeat(3, -1).astype(np.uint8)
+    frames[back | front] = fleece[back | front]
+    ids = np.zeros(frames.shape[:3], np.int32)
+    ids[back] = 1
+    ids[front] = 2
+    out = refine_by_colour(frames, ids)
+    both = (ids == 1) | (ids == 2)
+    np.testing.assert_array_equal(out[both], ids[both])
+
+
 def test_a_still_camera_keeps_lane_markings_out_of_a_moving_object():
     """A white bus beside white lane markings of the road: with the still camera's background
     model the markings stay road; without it they join the bus (what the model is for)."""
@@ -169,3 +188,33 @@ def test_colour_centres_find_the_colours_of_a_two_coloured_object():
     samples = np.concatenate([rng.normal(10, 1, (200, 3)), rng.normal(60, 1, (100, 3))]).astype(np.float32)
     c = colour_centres(samples, np.ones(len(samples)), k=2)
     assert sorted(np.round(c[:, 0] / 10).tolist()) == [1.0, 6.0]
+
+
+def test_a_planned_clip_gets_better_masks_and_a_planless_one_is_left_alone():
+    """The cube carried onto the plate while the camera circles the table (procedural assets,
+    64 px): its estimated mask against the generator's, IoU 0.68 -> 0.91 with the refinement
+    (measured). The same frames without a plan (a video: one "object" for every moving region)
+    get the masks they would get without it."""
+    import dataclasses
+
+    import morphosim_gym as ms
+    from morphosim_gym.priors import RGBPriorEstimators, prepare_priors
+    from morphosim_gym.priors.prepare import setting_label
+
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=64, height=64, num_frames=17, assets="off"),
+                       reconstruction="oracle")
+    clip = sim.generate_clip("a red cube moves to the plate while the camera circles the table", seed=0)
+    est = RGBPriorEstimators(setting_label=setting_label(clip))
+
+    def cube_iou(estimators) -> float:
+        out = prepare_priors(clip, "estimated", estimators=estimators)
+        mine = next(k for k, n in out.labels.items() if n == "cube")
+        truth = next(k for k, n in clip.labels.items() if n == "cube")
+        return _iou(out.masks == mine, clip.masks == truth)
+
+    assert cube_iou(est) > 0.85
+    assert cube_iou(dataclasses.replace(est, colour_refine=False)) < 0.75
+    plain = dataclasses.replace(est, colour_refine=False)
+    a, _ = est.masks(clip.frames, None, [], cameras=clip.cameras)
+    b, _ = plain.masks(clip.frames, None, [], cameras=clip.cameras)
+    np.testing.assert_array_equal(a, b)
