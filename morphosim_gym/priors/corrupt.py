@@ -27,6 +27,10 @@ def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10
     by 1..`mask_pixels` px, `mask_drop` of the frames' masks dropped (all background); tracks plus
     `track_noise` px Gaussian noise with `track_drop` of the observations invisible.
     `info["priors"]` says "corrupted"."""
+    for name, value in (("depth_field", depth_field), ("depth_noise", depth_noise), ("mask_pixels", mask_pixels),
+                        ("mask_drop", mask_drop), ("track_noise", track_noise), ("track_drop", track_drop)):
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f"Expected {name} >= 0, found {value!r}")
     missing = [n for n in ("depth", "masks", "tracks") if getattr(clip, n) is None]
     if missing:
         raise ValueError(f"Expected a clip carrying depth, masks and tracks to corrupt, missing {missing}")
@@ -41,6 +45,8 @@ def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10
         if rng.random() < mask_drop:
             masks[i] = -1
             continue
+        if mask_pixels <= 0:
+            continue                    # no border error asked for
         n = int(rng.integers(1, mask_pixels + 1))
         grow = rng.random() < 0.5
         out = np.full((h, w), -1, np.int32)
