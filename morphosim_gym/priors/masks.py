@@ -26,7 +26,7 @@ from ..scene.camera import Camera
 from .depth import ground_plane_depth
 from .protocol import BoxTrack, PlanTarget
 
-__all__ = ["box_contrast", "label_regions", "motion_foreground", "plan_targets", "static_plan_labels",
+__all__ = ["box_contrast", "label_regions", "motion_foreground", "plan_targets", "planned_boxes", "static_plan_labels",
            "static_regions", "still_camera"]
 
 
@@ -64,6 +64,12 @@ def _box_masks(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: floa
         m[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = True
         out.append(m)
     return out
+
+
+def planned_boxes(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: float) -> np.ndarray:
+    """[t, H, W] bool: inside any planned box (grown by `margin`) in each of the first t frames."""
+    return np.stack([np.any(_box_masks(targets, i, h, w, margin), axis=0) if targets else np.zeros((h, w), bool)
+                     for i in range(t)])
 
 
 def _background_difference(frames: np.ndarray, boxes: np.ndarray | None) -> np.ndarray:
@@ -125,8 +131,7 @@ def motion_foreground(frames: np.ndarray, cameras: Sequence[Camera] | None = Non
     if t < 2:
         return np.zeros((t, h, w), bool)
     if cameras is None or still_camera(cameras):
-        boxes = np.stack([np.any(_box_masks(targets, i, h, w, box_margin), axis=0) if targets
-                          else np.zeros((h, w), bool) for i in range(t)])
+        boxes = planned_boxes(targets, t, h, w, box_margin)
         diff = _background_difference(f, boxes)
         noise = float(np.median(np.abs(diff - np.median(diff)))) * 1.4826
         fg = diff > max(min_colour, colour_sigmas * noise)

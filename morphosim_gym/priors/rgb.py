@@ -11,7 +11,7 @@ import numpy as np
 from ..scene.camera import Camera
 from .depth import contact_depth, ground_plane_depth
 from .colour_refine import refine_by_colour
-from .masks import _box_masks, label_regions, motion_foreground, static_regions, still_camera
+from .masks import _box_masks, label_regions, motion_foreground, planned_boxes, static_regions, still_camera
 from .protocol import BoxTrack
 from .sizes import ObjectSize, size_depth
 from .tracks import flow_tracks
@@ -151,8 +151,7 @@ class RGBPriorEstimators:
             if cameras is None or still_camera(cameras):
                 # unchanged against a background model that saw the pixel free of every planned
                 # box in enough frames (a slow mug's own pixels are in its box in all of them)
-                boxed = np.stack([np.any(_box_masks(targets, i, h, w, self.box_margin), axis=0) if targets
-                                  else np.zeros((h, w), bool) for i in range(t)])
+                boxed = planned_boxes(targets, t, h, w, self.box_margin)     # the background model's boxes
                 still = ~fg & ((~boxed).sum(axis=0) >= max(1, 0.2 * t))[None]
             ids = refine_by_colour(f, ids, SETTING_ID, movers=range(1, len(targets) + 1), still=still)
         if setting.any():
