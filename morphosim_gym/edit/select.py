@@ -6,7 +6,10 @@
    latent f_j is decoded, its cosine similarities s to the prompt set T (the scene's object
    names plus the query) go through a softmax p(tau | j) = exp(s_tau / temp) / sum exp(s_i / temp),
    and the Gaussian's relevance is the probability mass of the prompts that mean the target
-   (the query and the matched objects' names).
+   (the query and the matched objects' names). When the field also has an "instance" channel
+   (unit codes of the 2D masks' instances, distilled like the rest), the relevance is weighed
+   by the same softmax mass over the objects' codes: names alone cannot tell "sheep 2" from
+   "sheep 1" (their embeddings are 0.89 alike), the instance channel can.
 3. The agent loop tries a range of thresholds on that relevance, renders each candidate
    selection from the generation camera at a few times (one pass, one channel per
    candidate), scores it (default `MaskAgreementScorer`: agreement with the 2D map of the
@@ -33,7 +36,7 @@ from typing import Protocol, Sequence
 import numpy as np
 
 from ..render import render
-from ..scene import Scene4D
+from ..scene import Scene4D, instance_codes
 
 __all__ = ["Selection", "CandidateScorer", "MaskAgreementScorer", "Selector", "DEFAULT_THRESHOLDS", "neighbourhood_mean"]
 
@@ -173,20 +176,22 @@ class Selector:
 
     def relevance(self, scene: Scene4D, ids: Sequence[int], query: str, features: np.ndarray | None = None
                   ) -> np.ndarray:
-        """[N] probability mass, per Gaussian (or per row of `features`, latents such as rendered
-        pixels), of the prompts that mean the target."""
+        """[N] relevance, per Gaussian (or per row of `features`, latents such as rendered pixels):
+        the probability mass of the prompts that mean the target, times, when the field has an
+        "instance" channel, the probability mass of the target objects' instance codes."""
         from ..language import embeddings
 
         names = [o.name for o in scene.objects]
         prompts = names + [query]
-        emb = embeddings.embed(prompts)                                       # [P, 384]
         f = scene.gaussians.features if features is None else features
-        s = scene.decoders["semantic"].similarity(f, emb) / self.temperature   # [N, P] cosine
-        s -= s.max(axis=1, keepdims=True)
-        p = np.exp(s)
-        p /= p.sum(axis=1, keepdims=True)
-        wanted = [i for i, o in enumerate(scene.objects) if o.id in set(ids)] + [len(prompts) - 1]
-        return p[:, wanted].sum(axis=1)
+        wanted = [i for i, o in enumerate(scene.objects) if o.id in set(ids)]
+        mass = _softmax_mass(scene.decoders["semantic"].similarity(f, embeddings.embed(prompts)) / self.temperature,
+                             wanted + [len(prompts) - 1])
+        inst = scene.decoders.get("instance")
+        if inst is not None:
+            codes = instance_codes([o.id for o in scene.objects], inst.out_dim)
+            mass = mass * _softmax_mass(inst.similarity(f, codes) / self.temperature, wanted)
+        return mass
 
     def _feature_field(self, scene: Scene4D, ids: tuple[int, ...], query: str,
                        evidence: np.ndarray | None = None) -> Selection:
@@ -231,6 +236,13 @@ class Selector:
         best = int(near[np.argmax(cands[:, near].sum(axis=0))])
         return Selection(cands[:, best] > 0.5, ids, "feature_field", levels[best][0],
                          [(t, float(s)) for (t, _), s in zip(levels, scores)], rel)
+
+
+def _softmax_mass(logits: np.ndarray, wanted: Sequence[int]) -> np.ndarray:
+    """[N] softmax probability of the `wanted` columns of [N, P] logits, summed."""
+    s = logits - logits.max(axis=1, keepdims=True)
+    p = np.exp(s)
+    return p[:, list(wanted)].sum(axis=1) / p.sum(axis=1)
 
 
 def neighbourhood_mean(points: np.ndarray, values: np.ndarray, voxel: float) -> np.ndarray:

@@ -7,6 +7,9 @@ encoders' per-pixel feature maps.
 * `LabelEmbeddingEncoder` ("semantic"): each pixel is the sentence embedding (MiniLM, the
   shared `morphosim_gym.language.embeddings`) of its instance label; queries such as "the
   vehicle" are embedded the same way at edit time;
+* `InstanceCodeEncoder` ("instance"): each pixel is the unit code of its mask's instance id
+  (`scene.instance_codes`), so objects that share a label or a meaning ("sheep 1" and "sheep 2")
+  stay apart in the field; the selector weighs the query's meaning by it;
 * `ColorEncoder` ("color"): each pixel's CIE Lab colour, scaled to about [-1, 1].
 
 `ClipImageEncoder` uses a CLIP-style vision model from a local directory when one is
@@ -28,10 +31,10 @@ from tqdm.auto import tqdm
 from ..errors import BackendUnavailableError
 from ..metrics import rgb_to_lab
 from ..render import rasterize
-from ..scene import FeatureDecoder, GeneratedClip
+from ..scene import INSTANCE_DIM, FeatureDecoder, GeneratedClip, instance_codes
 from .model import DynamicGaussians
 
-__all__ = ["PixelEncoder", "LabelEmbeddingEncoder", "ColorEncoder", "ClipImageEncoder", "FeatureConfig",
+__all__ = ["PixelEncoder", "LabelEmbeddingEncoder", "InstanceCodeEncoder", "ColorEncoder", "ClipImageEncoder", "FeatureConfig",
            "distill_features", "MLP"]
 
 
@@ -75,6 +78,24 @@ class LabelEmbeddingEncoder:
         out = np.zeros(m.shape + (self.dim,), np.float32)
         for inst, vec in table.items():
             out[m == inst] = vec
+        return out, m >= 0
+
+
+class InstanceCodeEncoder:
+    """Each pixel -> the unit code of its mask's instance id (`scene.instance_codes`)."""
+
+    name = "instance"
+    normalize = True
+    dim = INSTANCE_DIM
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        if clip.masks is None:
+            raise ValueError("Expected a clip with instance masks for the instance encoder, found none")
+        m = clip.masks[frame]
+        ids = np.unique(m[m >= 0])
+        out = np.zeros(m.shape + (self.dim,), np.float32)
+        for inst, code in zip(ids.tolist(), instance_codes(ids.tolist(), self.dim)):
+            out[m == inst] = code
         return out, m >= 0
 
 
@@ -168,7 +189,7 @@ class FeatureConfig:
         pixels: pixels sampled per step for the decoders' loss (0: all).
         lr_features, lr_decoders: learning rates.
         hidden: decoder hidden width.
-        encoders: which offline encoders ("semantic", "color"); `clip_path` adds a CLIP-style one.
+        encoders: which offline encoders ("semantic", "instance", "color"); `clip_path` adds a CLIP-style one.
         clip_path: local directory of a CLIP model, or None.
         backend: renderer.
         progress: tqdm bar.
@@ -189,7 +210,7 @@ class FeatureConfig:
     lr_features: float = 1e-2
     lr_decoders: float = 3e-3
     hidden: int = 64
-    encoders: tuple[str, ...] = ("semantic", "color")
+    encoders: tuple[str, ...] = ("semantic", "instance", "color")
     clip_path: str | None = None
     backend: str = "cpu"
     progress: bool = True
@@ -197,15 +218,15 @@ class FeatureConfig:
     fill_neighbours: int = 8
 
 
+OFFLINE_ENCODERS = {"semantic": LabelEmbeddingEncoder, "instance": InstanceCodeEncoder, "color": ColorEncoder}
+
+
 def _encoders(cfg: FeatureConfig) -> list:
     out = []
     for name in cfg.encoders:
-        if name == "semantic":
-            out.append(LabelEmbeddingEncoder())
-        elif name == "color":
-            out.append(ColorEncoder())
-        else:
-            raise ValueError(f"Expected encoders among ('semantic', 'color'), found {name!r}")
+        if name not in OFFLINE_ENCODERS:
+            raise ValueError(f"Expected encoders among {tuple(OFFLINE_ENCODERS)}, found {name!r}")
+        out.append(OFFLINE_ENCODERS[name]())
     if cfg.clip_path:
         out.append(ClipImageEncoder(cfg.clip_path))
     return out
@@ -215,17 +236,18 @@ def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Seq
                      rng: np.random.Generator, frames: int = 12, depth_tolerance: float = 0.05) -> np.ndarray:
     """[N, dim] starting latents from what the frames show, never from the Gaussians' instance ids:
     a fixed random projection of each Gaussian's Lab colour, plus a random projection of the
-    semantic encoder's pixel feature where the Gaussian's centre lands, within `depth_tolerance`
-    of the depth prior (so it is seen there, not hidden), in one of `frames` frames spread over
-    the clip (averaged over those frames), plus noise. Gaussians that no view shows start from their colour alone."""
+    mask-based encoders' pixel features ("semantic", "instance") where the Gaussian's centre lands,
+    within `depth_tolerance` of the depth prior (so it is seen there, not hidden), in one of
+    `frames` frames spread over the clip (averaged over those frames), plus noise. Gaussians that
+    no view shows start from their colour alone."""
     with torch.no_grad():
         rgb = model.colors().detach().numpy().astype(np.float64)
     lab = rgb_to_lab(rgb) / np.array([50.0, 64.0, 64.0]) - np.array([1.0, 0.0, 0.0])
     init = 0.3 * lab @ rng.normal(size=(3, dim)) + 0.05 * rng.normal(size=(len(lab), dim))
-    sem = next((e for e in encoders if e.name == "semantic"), None)
-    if sem is None or clip.masks is None:
+    from_masks = [e for e in encoders if e.name in ("semantic", "instance")]
+    if not from_masks or clip.masks is None:
         return init
-    proj = rng.normal(size=(sem.dim, dim))
+    projs = [rng.normal(size=(e.dim, dim)) for e in from_masks]
     seen = np.zeros(len(lab), bool)
     code = np.zeros_like(init)
     hits = np.zeros(len(lab))
@@ -237,7 +259,8 @@ def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Seq
         with np.errstate(invalid="ignore"):
             c, r = np.floor(uv[:, 0]), np.floor(uv[:, 1])
             ok = (z > clip.cameras[t].near) & (c >= 0) & (c < W) & (r >= 0) & (r < H)
-        feat, valid = sem.encode(clip, t)
+        encoded = [e.encode(clip, t) for e in from_masks]
+        valid = encoded[0][1]
         idx = np.flatnonzero(ok)
         ci, ri = c[idx].astype(int), r[idx].astype(int)
         if clip.depth is not None:                  # visible there: at the depth prior's depth
@@ -246,7 +269,8 @@ def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Seq
         else:
             valid_here = valid[ri, ci]
         idx, ci, ri = idx[valid_here], ci[valid_here], ri[valid_here]
-        code[idx] += feat[ri, ci].astype(np.float64) @ proj
+        for (feat, _), proj in zip(encoded, projs):
+            code[idx] += feat[ri, ci].astype(np.float64) @ proj
         hits[idx] += 1
         seen[idx] = True
     code[seen] /= hits[seen, None]

@@ -3,6 +3,10 @@
 The paper's decoders D^s are trained on rasterised 2D feature maps and applied
 directly to per-Gaussian 3D features at edit time. Weights are stored as numpy
 arrays so a scene needs no torch to be loaded, saved or queried.
+
+`instance_codes` are the targets of the "instance" channel: one unit vector per instance id of
+the 2D masks the field was distilled from, so that two objects with the same label ("sheep 1",
+"sheep 2", whose sentence embeddings are 0.89 alike) still read apart.
 """
 
 from __future__ import annotations
@@ -12,7 +16,9 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["FeatureDecoder"]
+__all__ = ["FeatureDecoder", "instance_codes", "INSTANCE_DIM"]
+
+INSTANCE_DIM = 16
 
 
 @dataclass(eq=False)
@@ -107,3 +113,19 @@ class FeatureDecoder:
         """Inverse of `arrays`."""
         n = len([k for k in arrays if k.startswith("w")])
         return cls(name, [arrays[f"w{i}"] for i in range(n)], [arrays[f"b{i}"] for i in range(n)], normalize)
+
+
+def instance_codes(ids: Sequence[int], dim: int = INSTANCE_DIM) -> np.ndarray:
+    """[len(ids), dim] unit vectors, one per instance id: the basis vector e_id for 0 <= id < dim
+    (mutually orthogonal), a fixed random unit vector drawn from the id beyond that (or for a
+    negative id)."""
+    if dim < 1:
+        raise ValueError(f"Expected an instance code width >= 1, found {dim}")
+    out = np.zeros((len(ids), dim), np.float32)
+    for row, k in enumerate(int(i) for i in ids):
+        if 0 <= k < dim:
+            out[row, k] = 1.0
+        else:
+            v = np.random.default_rng([abs(k), k < 0, 0x1D5]).normal(size=dim)
+            out[row] = v / np.linalg.norm(v)
+    return out
