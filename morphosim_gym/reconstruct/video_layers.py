@@ -359,8 +359,12 @@ def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep:
     the kept ones moving as fitted and the layers on their own nodes, on the half-step timeline."""
     gaussians = _concat(parts)
     n = len(gaussians)
-    frames = 2 * clip.num_frames - 1 if layers else 1
-    rot, tr, node_objects, kept_nodes, kept_weights = _half_step_motion(scene.motion, keep, frames)
+    if layers:
+        rot, tr, node_objects, kept_nodes, kept_weights = _half_step_motion(scene.motion, keep, 2 * clip.num_frames - 1)
+    else:                                   # no layers: the fitted timeline, motion and cameras as they are
+        fitted = scene.motion
+        rot, tr, node_objects = fitted.rotations, fitted.translations, fitted.node_objects
+        kept_nodes, kept_weights = fitted.skin_nodes[keep], fitted.skin_weights[keep]
     slots = max(1, kept_nodes.shape[1])
     skin_nodes = np.full((n, slots), -1, np.int32)
     skin_weights = np.zeros((n, slots), np.float32)
@@ -368,6 +372,7 @@ def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep:
     skin_weights[:len(kept_nodes), :kept_nodes.shape[1]] = kept_weights
     objects = scene.objects
     if layers:
+        frames = rot.shape[0]
         m, k0 = len(layers["means"]), rot.shape[1]
         skin_nodes[n - m:, 0] = layers["node"] + k0
         skin_weights[n - m:, 0] = 1.0

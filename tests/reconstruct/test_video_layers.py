@@ -118,6 +118,26 @@ def test_kept_fitted_movers_keep_their_motion_on_the_half_step_timeline():
     assert len(dropped.gaussians) == len(scene.gaussians) - 1
 
 
+def test_without_movers_a_moving_camera_scene_keeps_its_fitted_timeline():
+    """No mover found (no layers) in a panning clip: the fitted motion and cameras stay as they are
+    (the half-step timeline is only for layers; it froze the fit at its first frame and, with one
+    camera per frame, failed with "Expected 1 or 1 Cameras, found 7")."""
+    clip, pri = _clip()
+    cams = tuple(c.orbit(2.0 * i, np.zeros(3)) for i, c in enumerate(clip.cameras))
+    clip = GeneratedClip(clip.frames, cams, clip.fps, prompt=clip.prompt)
+    rot = np.tile([1.0, 0, 0, 0], (T, 1, 1))
+    trans = np.zeros((T, 1, 3))
+    trans[:, 0, 0] = np.arange(T) * 0.2                      # the fitted person node walks along x
+    motion = Motion(rot, trans, np.array([[-1], [0]]), np.array([[0.0], [1.0]]), np.array([1]))
+    fitted = Scene4D(_fitted(clip).gaussians, motion, _fitted(clip).objects, clip.fps, cams)
+    scene = motion_layers(fitted, clip, priors=LayerPriors(pri.masks * 0 - 1, pri.depth, ()))
+    assert len(scene.gaussians) == len(fitted.gaussians) and scene.fps == fitted.fps
+    assert scene.cameras == fitted.cameras
+    np.testing.assert_allclose(scene.motion.translations[:, 0, 0], np.arange(T) * 0.2)
+    np.testing.assert_allclose(scene.object_center("person", scene.duration) - scene.object_center("person", 0.0),
+                               fitted.object_center("person", fitted.duration) - fitted.object_center("person", 0.0))
+
+
 def test_a_region_that_no_shift_matches_better_stays_still():
     clip, pri = _clip()
     flat = np.full_like(clip.frames[:2], 120)                     # nothing to match: every shift ties
