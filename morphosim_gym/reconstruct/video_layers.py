@@ -423,7 +423,8 @@ def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice]
 def _feature_table(scene: Scene4D, ids: np.ndarray) -> np.ndarray | None:
     """[max id + 1, D] latent for new Gaussians of each object id: the object's prototype
     (`object_prototypes`: the latent that decodes most clearly as its name; None without features)."""
-    protos = object_prototypes(scene.gaussians, scene.objects, scene.decoders.get("semantic"))
+    protos = object_prototypes(scene.gaussians, scene.objects, scene.decoders.get("semantic"),
+                               instance=scene.decoders.get("instance"))
     if not protos:
         return None
     dim = len(next(iter(protos.values())))
