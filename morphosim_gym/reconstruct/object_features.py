@@ -29,9 +29,7 @@ __all__ = ["name_margins", "code_margins", "object_prototypes", "steer_latent"]
 def name_margins(decoder: FeatureDecoder, latents: np.ndarray, names: Sequence[str]) -> np.ndarray:
     """[N, P] decoded cosine similarity of each latent to each name minus its best similarity to
     the other names (> 0: the latent reads as that name)."""
-    from ..language import embeddings
-
-    return _margins(decoder.similarity(np.asarray(latents, np.float32), embeddings.embed(list(names))))
+    return _margins(decoder.similarity(np.asarray(latents, np.float32), embeddings_of(names)))
 
 
 def _margins(s: np.ndarray) -> np.ndarray:
