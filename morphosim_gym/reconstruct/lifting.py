@@ -217,6 +217,29 @@ def track_noise(clip: GeneratedClip, idx: np.ndarray) -> float:
     return float(1.4826 * np.median(vals) / np.sqrt(6.0))
 
 
+def reprojection_residual(clip: GeneratedClip, instance: int, reference: int, rots: np.ndarray,
+                          trans: np.ndarray, min_tracks: int = 4) -> float:
+    """How well per-frame rigid poses (rotations [T, 3, 3], translations [T, 3], reference-frame
+    world points to each frame) explain an instance's tracks in the image, in pixels: its tracks
+    lifted by depth in the reference frame, moved by each frame's pose and projected with that
+    frame's camera; the median over frames of the median distance to the tracked positions
+    (nan when no frame has `min_tracks` of them). Depth errors move the lifted points along
+    their rays, which the image barely sees."""
+    if clip.tracks is None:
+        return float("nan")
+    idx = instance_tracks(clip, instance)
+    idx = idx[clip.track_visible[idx, reference]]
+    src, ok = _lift_tracks(clip, reference, clip.tracks[idx, reference])
+    per_frame = []
+    for t in range(clip.num_frames):
+        use = clip.track_visible[idx, t] & ok
+        if t == reference or use.sum() < min_tracks:
+            continue
+        uv, z = clip.cameras[t].project(src[use] @ rots[t].T + trans[t])
+        per_frame.append(float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
+    return float(np.median(per_frame)) if per_frame else float("nan")
+
+
 def static_residual(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
                     scales: np.ndarray = np.linspace(0.85, 1.15, 31), percentile: float = 75.0) -> float:
     """How badly "this instance does not move" explains its tracks, in pixels: the instance's
