@@ -27,7 +27,7 @@ from ..scene.rotations import normal_quats
 from .lifting import (PointSet, backproject, instance_motion, instance_tracks, interior_mask, mask_motion,
                       reprojection_residual, static_residual, track_noise, voxel_downsample)
 from .model import DynamicGaussians
-from .spin import spin_angles, spin_poses
+from .spin import WORLD_UP, spin_angles, spin_poses
 
 __all__ = ["InitConfig", "InitResult", "initialize", "unlabelled_host"]
 
@@ -67,7 +67,8 @@ class InitConfig:
             the tracks within 1.4x as well); a rolling ball's turn explains them 9-25x better.
         spin: a moving instance whose own pixels show it turning steadily about the line of
             sight (`spin.spin_angles`: a rolling ball, whose small textured disc the flow's
-            tracks see mostly translating) takes that turn as its rotation, pivoting on its
+            tracks see mostly translating) takes that turn as its rotation, rolling about the
+            horizontal part of the line of sight (`spin.spin_poses` with `WORLD_UP`), pivoting on its
             centre along the chosen path, when: ECC measured at least `spin_measured` of the frame
             pairs where its mask is seen, with a median correlation >= `spin_correlation`; the
             turns add up to >= `spin_degrees`; and they are consistent (|mean| over its standard
@@ -224,7 +225,7 @@ def _spun(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, centre: np.
         return poses
     rots, trans = poses
     path = np.einsum("tij,j->ti", rots, centre) + trans - centre      # where the centre goes
-    spun = spin_poses(clip, ref, centre, path, angles)
+    spun = spin_poses(clip, ref, centre, path, angles, up=WORLD_UP)
     turn, own = _turn_angles(spun[0]), _turn_angles(rots)
     far = turn > np.radians(10.0)
     if far.any() and np.median(own[far] / turn[far]) >= cfg.spin_kept:

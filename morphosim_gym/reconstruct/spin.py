@@ -17,7 +17,10 @@ import numpy as np
 from ..scene import GeneratedClip
 from .lifting import off_border
 
-__all__ = ["spin_angles", "spin_poses"]
+__all__ = ["WORLD_UP", "spin_angles", "spin_poses"]
+
+#: the world's up direction (the ground is a plane z = const, cameras stand upright about z)
+WORLD_UP = np.array([0.0, 0.0, 1.0])
 
 
 def spin_angles(clip: GeneratedClip, instance: int, min_pixels: int = 24, iterations: int = 100,
@@ -68,23 +71,39 @@ def _about(axis: np.ndarray, angle: float) -> np.ndarray:
 
 
 def spin_poses(clip: GeneratedClip, reference: int, centre: np.ndarray, trans: np.ndarray, angles: np.ndarray,
-               ) -> tuple[np.ndarray, np.ndarray]:
+               up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Rigid poses (rotations [T, 3, 3], translations [T, 3], reference-frame world points to each
     frame) of an object whose centre, at world `centre` in the reference frame, moves by `trans`
     [T, 3] and which turns by `angles` [T - 1] (`spin_angles`) about the ray from frame k's camera
-    to its centre between frames k and k + 1."""
+    to its centre between frames k and k + 1.
+
+    With a world `up` direction the object rolls instead: it turns about the ray's part
+    perpendicular to `up` (a ball rolling on the ground turns about a horizontal axis), by the
+    image's turn over the cosine between that axis and the ray (the image sees only the turn's
+    part along the line of sight); rays within 30 degrees of `up` keep the ray as the axis."""
     T = clip.num_frames
     rots = np.tile(np.eye(3), (T, 1, 1))
     c = np.asarray(centre, np.float64)
+    u = None if up is None else np.asarray(up, np.float64) / np.linalg.norm(up)
 
     def ray(k: int) -> np.ndarray:
         d = c + trans[k] - clip.cameras[k].position
         n = np.linalg.norm(d)
         return d / n if n > 0 else clip.cameras[k].camera_to_world[:3, 2]
 
+    def turn(k: int, angle: float) -> np.ndarray:
+        d = ray(k)
+        if u is None:
+            return _about(d, angle)
+        flat = d - (d @ u) * u
+        cos = float(np.linalg.norm(flat))
+        if cos < np.cos(np.radians(60.0)):
+            return _about(d, angle)
+        return _about(flat / cos, angle / cos)
+
     for k in range(reference, T - 1):                       # forward from the reference
-        rots[k + 1] = _about(ray(k), angles[k]) @ rots[k]
+        rots[k + 1] = turn(k, angles[k]) @ rots[k]
     for k in range(reference - 1, -1, -1):                  # backward: undo the turn k -> k + 1
-        rots[k] = _about(ray(k), -angles[k]) @ rots[k + 1]
+        rots[k] = turn(k, -angles[k]) @ rots[k + 1]
     # the centre follows its own path: x_t = R_t (x - c) + c + trans_t
     return rots, c + trans - np.einsum("tij,j->ti", rots, c)
