@@ -80,7 +80,8 @@ def spin_poses(clip: GeneratedClip, reference: int, centre: np.ndarray, trans: n
     With a world `up` direction the object rolls instead: it turns about the ray's part
     perpendicular to `up` (a ball rolling on the ground turns about a horizontal axis), by the
     image's turn over the cosine between that axis and the ray (the image sees only the turn's
-    part along the line of sight); rays within 30 degrees of `up` keep the ray as the axis."""
+    part along the line of sight); rays within 30 degrees of vertical (up or down) keep the ray
+    as the axis."""
     T = clip.num_frames
     rots = np.tile(np.eye(3), (T, 1, 1))
     c = np.asarray(centre, np.float64)
