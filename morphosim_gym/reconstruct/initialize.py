@@ -242,6 +242,7 @@ def _evident_turn(clip: GeneratedClip, inst: int, ref: int, cfg: InitConfig, cen
     eye = np.tile(np.eye(3), (clip.num_frames, 1, 1))
     turned = reprojection_residual(clip, inst, ref, rots, trans)
     unturned = reprojection_residual(clip, inst, ref, eye, path)
+    # (a residual under 0.05 px, exact tracks, counts as 0.05: no ratio of two rounding errors)
     if not (np.isfinite(turned) and np.isfinite(unturned)) or unturned >= cfg.rotation_evidence * max(turned, 0.05):
         return poses                     # nothing to judge by, or the turn is evident
     return eye, path

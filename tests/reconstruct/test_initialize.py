@@ -84,12 +84,12 @@ def test_a_moving_object_starts_from_the_pose_hypothesis_that_lands_it_on_its_ma
     # exact tracks of a bus that does not turn: their rigid poses' path of its centre, unturned
     # (their small turn explains the tracks no better than none)
     rots, trans, _ = instance_motion(clip, bus, ref)
-    centre = exact.instance_poses[bus]
+    poses = exact.instance_poses[bus]
     pts = clip.cameras[ref].unproject(np.argwhere(clip.masks[ref] == bus)[:, ::-1] + 0.5,
                                       clip.depth[ref][clip.masks[ref] == bus])
-    c = pts.mean(0)
-    assert np.allclose(centre[0], np.eye(3))
-    assert np.allclose(centre[1], np.einsum("tij,j->ti", rots, c) + trans - c, atol=1e-6)
+    c = pts.mean(0)                                  # the bus's centre in its reference frame
+    assert np.allclose(poses[0], np.eye(3))
+    assert np.allclose(poses[1], np.einsum("tij,j->ti", rots, c) + trans - c, atol=1e-6)
     # tracks the flow dragged along at half the bus's speed: they still show it moving, but their
     # poses leave it behind its masks; the masks' own translation takes over
     t0 = clip.tracks[:, ref].astype(int).clip(0, clip.width - 1)
