@@ -217,6 +217,23 @@ def track_noise(clip: GeneratedClip, idx: np.ndarray) -> float:
     return float(1.4826 * np.median(vals) / np.sqrt(6.0))
 
 
+def _frame_errors(clip: GeneratedClip, idx: np.ndarray, reference: int, points: np.ndarray, ok: np.ndarray,
+                  rots: np.ndarray | None = None, trans: np.ndarray | None = None, min_tracks: int = 4) -> list[float]:
+    """Per frame (other than the reference, with `min_tracks` of tracks `idx` seen there and a
+    depth in the reference, `ok`), the median image distance between the tracked positions and
+    their reference-frame world `points`, moved by that frame's pose (rotations [T, 3, 3],
+    translations [T, 3]; none: not moved) and projected with that frame's camera."""
+    errors = []
+    for t in range(clip.num_frames):
+        use = clip.track_visible[idx, t] & ok
+        if t == reference or use.sum() < min_tracks:
+            continue
+        pts = points[use] if rots is None else points[use] @ rots[t].T + trans[t]
+        uv, _ = clip.cameras[t].project(pts)
+        errors.append(float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
+    return errors
+
+
 def reprojection_residual(clip: GeneratedClip, instance: int, reference: int, rots: np.ndarray,
                           trans: np.ndarray, min_tracks: int = 4) -> float:
     """How well per-frame rigid poses (rotations [T, 3, 3], translations [T, 3], reference-frame
@@ -230,14 +247,8 @@ def reprojection_residual(clip: GeneratedClip, instance: int, reference: int, ro
     idx = instance_tracks(clip, instance)
     idx = idx[clip.track_visible[idx, reference]]
     src, ok = _lift_tracks(clip, reference, clip.tracks[idx, reference])
-    per_frame = []
-    for t in range(clip.num_frames):
-        use = clip.track_visible[idx, t] & ok
-        if t == reference or use.sum() < min_tracks:
-            continue
-        uv, z = clip.cameras[t].project(src[use] @ rots[t].T + trans[t])
-        per_frame.append(float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
-    return float(np.median(per_frame)) if per_frame else float("nan")
+    errors = _frame_errors(clip, idx, reference, src, ok, rots, trans, min_tracks)
+    return float(np.median(errors)) if errors else float("nan")
 
 
 def static_residual(clip: GeneratedClip, instance: int, reference: int, min_tracks: int = 4,
@@ -260,14 +271,7 @@ def static_residual(clip: GeneratedClip, instance: int, reference: int, min_trac
     rays = src - cam_ref.position
     best = np.inf
     for s in scales:
-        per_frame = []
-        pts = cam_ref.position + s * rays
-        for t in range(clip.num_frames):
-            use = clip.track_visible[idx, t] & ok
-            if t == reference or use.sum() < min_tracks:
-                continue
-            uv, _ = clip.cameras[t].project(pts[use])
-            per_frame.append(float(np.median(np.linalg.norm(uv - clip.tracks[idx[use], t], axis=1))))
+        per_frame = _frame_errors(clip, idx, reference, cam_ref.position + s * rays, ok, min_tracks=min_tracks)
         if per_frame:
             best = min(best, float(np.percentile(per_frame, percentile)))
     return 0.0 if not np.isfinite(best) else float(best)

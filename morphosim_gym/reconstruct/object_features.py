@@ -86,13 +86,13 @@ def object_prototypes(g: Gaussians, objects: Sequence[SceneObject], decoder: Fea
         raise ValueError(f"Expected share in (0, 1], found {share!r}")
     if decoder is None or len(objects) < 2:
         return {o.id: (f[ids == o.id] if (ids == o.id).any() else f).mean(axis=0) for o in objects}
-    names = [o.name for o in objects]
-    codes_of = [o.id for o in objects]
-    margins = name_margins(decoder, f, names)
+    names = embeddings_of([o.name for o in objects])                      # [P, 384], once
+    codes = None if instance is None else instance_codes([o.id for o in objects], instance.out_dim)
+    margins = _margins(decoder.similarity(f, names))
 
     def reads(z: np.ndarray, j: int) -> bool:
-        return bool(name_margins(decoder, z[None], names)[0, j] > 0
-                    and (instance is None or code_margins(instance, z[None], codes_of)[0, j] > 0))
+        return bool(_margins(decoder.similarity(z[None], names))[0, j] > 0
+                    and (codes is None or _margins(instance.similarity(z[None], codes))[0, j] > 0))
 
     out: dict[int, np.ndarray] = {}
     for j, o in enumerate(objects):
@@ -105,9 +105,9 @@ def object_prototypes(g: Gaussians, objects: Sequence[SceneObject], decoder: Fea
             continue
         best = f[int(np.argmax(margins[:, j])) if margins[pool, j].max() <= 0 else int(top[0])]
         if not reads(best, j):
-            targets = [(decoder, embeddings_of(names), j)]
-            if instance is not None:
-                targets.append((instance, instance_codes(codes_of, instance.out_dim), j))
+            targets = [(decoder, names, j)]
+            if codes is not None:
+                targets.append((instance, codes, j))
             best = steer_latent(best, targets)
         out[o.id] = best
     return out
