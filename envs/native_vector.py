@@ -29,6 +29,7 @@ from . import ENTRY_POINTS
 from .options import ResetOptions
 from .spaces import check_action
 from .threads import numba_threads
+from .vector_infos import InfoBatch, add_info
 from .wrappers import LanguagePerturbation
 
 __all__ = ["MorphoSimVectorEnv", "vector_entry_point"]
@@ -172,22 +173,19 @@ class MorphoSimVectorEnv(VectorEnv):
     # ================================================================== step
     def step(self, actions: Any) -> tuple[dict, np.ndarray, np.ndarray, np.ndarray, dict]:
         n = self.num_envs
-        acts = self._checked_actions(actions)
-        rewards = np.zeros(n, dtype=np.float64)
-        terms = np.zeros(n, dtype=bool)
-        truncs = np.zeros(n, dtype=bool)
+        st = _StepState(self._checked_actions(actions), n)
         stepping = [i for i in range(n) if not self._autoreset[i]]
         resetting = [i for i in range(n) if self._autoreset[i]]
         # resets of unwrapped envs join the first chunk's render (serial batch only); the others reset here
         joining = [i for i in resetting if self._steppers[i] is None] if self._pipeline_chunks() == 1 else []
-        reset_out = {i: (self._steppers[i] or self.envs[i]).reset() for i in resetting if i not in joining}
+        for i in resetting:
+            if i not in joining:
+                st.reset_out[i] = (self._steppers[i] or self.envs[i]).reset()
+                st.infos.add(i, st.reset_out[i][1])
         # chunk by chunk: advance and build the render requests ("views": each view is handed to the
         # render helpers as soon as its env is advanced), start the chunk's render, finish the
         # previous chunk (reward, observation, info) while this one renders
         pending: deque = deque()
-        extra: dict = {}
-        checked: dict = {}
-        stepped: list = []
         chunks = self._chunks(stepping) or [[]]
         chunks[0] = joining + chunks[0]
         try:
@@ -196,24 +194,22 @@ class MorphoSimVectorEnv(VectorEnv):
                     continue
                 sink = self._open(c, chunk)
                 pending.append((chunk, None, sink))
-                requests = self._prepare(chunk, acts, checked, extra, sink)
+                requests = self._prepare(chunk, st, sink)
                 pending[-1] = (chunk, requests, self._launch(requests, c, sink))
                 if len(pending) > 1:
-                    self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
+                    self._finish(*pending.popleft(), st)
             while pending:
-                self._finish(*pending.popleft(), checked, extra, rewards, terms, truncs, reset_out, stepped)
+                self._finish(*pending.popleft(), st)
         except BaseException:
             for _, _, launched in pending:     # no helper may still write into a workspace the next step reuses
                 if isinstance(launched, PendingRender):
                     launched.cancel()
             raise
-        entries = []
-        for i in resetting:                      # reset infos first, then the steps', as each env's own order
-            self._obs[i], info = reset_out[i]
-            entries.append((i, info))
-        infos = self._batch_infos(entries + stepped)
-        self._autoreset = terms | truncs
-        return self._batched_obs(), rewards, terms, truncs, infos
+        for i in resetting:
+            self._obs[i] = st.reset_out[i][0]
+        infos = st.infos.result(order=resetting + sorted(st.stepped))   # reset infos first, as each env's own
+        self._autoreset = st.terms | st.truncs
+        return self._batched_obs(), st.rewards, st.terms, st.truncs, infos
 
     def _checked_actions(self, actions: Any) -> list:
         """Every env's action, checked before any env is stepped (a bad one raises, naming its env,
@@ -238,32 +234,36 @@ class MorphoSimVectorEnv(VectorEnv):
                 raise ValueError(f"Expected a valid action for env {i}: {exc}; no env was stepped") from None
         return out
 
-    def _finish(self, chunk: list, requests: list, launched: Any, checked: dict, extra: dict, rewards: np.ndarray,
-                terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
-        """The rest of the step of a chunk's envs once its render is done: a resetting env's
-        (observation, info) into `reset_out`, a stepping env's (index, info) onto `stepped`.
-        With the "views" scheduler each env is finished as soon as its own views are rendered,
-        while the helpers render the next envs' views."""
+    def _finish(self, chunk: list, requests: list, launched: Any, st: "_StepState") -> None:
+        """The rest of the step of a chunk's envs once its render is done (`_finish_env`). With the
+        "views" scheduler each env is finished as soon as its own views are rendered, in whatever
+        order that is (this thread renders views from the last while the helpers render them from
+        the first), while the helpers render other envs' views."""
         if isinstance(launched, PendingRender):
-            k = 0
+            left, k = [], 0
             for i, request in zip(chunk, requests):
-                n = len(request[1])
-                rendered = self._rendered([i], [request], launched.partial(k, k + n))[0]
-                k += n
-                self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+                left.append((i, request, k, k + len(request[1])))
+                k += len(request[1])
+            while left:                          # first the envs whose views are done, whichever they are
+                i, request, lo, hi = left.pop(launched.first_ready([(lo, hi) for _, _, lo, hi in left]))
+                self._finish_env(i, self._rendered([i], [request], launched.partial(lo, hi))[0], st)
             return
         outs = launched.result(timeout=_RENDER_TIMEOUT_S) if isinstance(launched, Future) else launched
         for i, rendered in zip(chunk, self._rendered(chunk, requests, outs)):
-            self._finish_env(i, rendered, checked, extra, rewards, terms, truncs, reset_out, stepped)
+            self._finish_env(i, rendered, st)
 
-    def _finish_env(self, i: int, rendered: tuple, checked: dict, extra: dict, rewards: np.ndarray,
-                    terms: np.ndarray, truncs: np.ndarray, reset_out: dict, stepped: list) -> None:
-        if i in checked:
-            self._obs[i], rewards[i], terms[i], truncs[i], info = self.envs[i]._step_outcome(checked[i], rendered)
-            info.update(extra[i])
-            stepped.append((i, info))
+    def _finish_env(self, i: int, rendered: tuple, st: "_StepState") -> None:
+        """Env i's reward, flags, observation and info (into `st`; its info into the step's
+        `InfoBatch` at once), or the end of its reset (into `st.reset_out`)."""
+        if i in st.checked:
+            self._obs[i], st.rewards[i], st.terms[i], st.truncs[i], info = self.envs[i]._step_outcome(
+                st.checked[i], rendered)
+            info.update(st.extra[i])
+            st.stepped.append(i)
         else:
-            reset_out[i] = self.envs[i]._reset_end(rendered)
+            st.reset_out[i] = self.envs[i]._reset_end(rendered)
+            info = st.reset_out[i][1]
+        st.infos.add(i, info)
 
     def _advance(self, i: int, action: Any) -> tuple[np.ndarray, dict]:
         """Env i's step up to its render (through its `LanguagePerturbation` if any): the checked
@@ -292,9 +292,9 @@ class MorphoSimVectorEnv(VectorEnv):
     def _pipeline_chunks(self) -> int:
         return 1 if self.pipeline is None else self.pipeline   # None: one chunk (see __init__)
 
-    def _prepare(self, chunk: list, acts: list, checked: dict, extra: dict, sink: Optional[PendingRender]) -> list:
-        """Advance each env of the chunk (`_advance`: checked action and wrapper keys into `checked`
-        and `extra`), or begin its reset if it is resetting (it stays out of `checked`), and build
+    def _prepare(self, chunk: list, st: "_StepState", sink: Optional[PendingRender]) -> list:
+        """Advance each env of the chunk (`_advance`: checked action and wrapper keys into
+        `st.checked` and `st.extra`), or begin its reset if it is resetting (it stays out of `checked`), and build
         its `_render_request`, whose views go into `sink` at once when given (then closed); one
         `numba_threads` per run of envs with the same `render_threads` (it is not free: a lock and
         two thread-count changes)."""
@@ -307,7 +307,7 @@ class MorphoSimVectorEnv(VectorEnv):
                         gym.Env.reset(env)                 # as env.reset() does before its own work
                         env._reset_begin(ResetOptions.parse(None))
                     else:
-                        checked[i], extra[i] = self._advance(i, acts[i])
+                        st.checked[i], st.extra[i] = self._advance(i, st.acts[i])
                     request = env._render_request(env.world.t)
                     requests.append(request)
                     if sink is not None:
@@ -372,65 +372,8 @@ class MorphoSimVectorEnv(VectorEnv):
         return rendered
 
     def _add_info(self, vector_infos: dict, env_info: dict, env_num: int) -> dict:
-        """`VectorEnv._add_info` (same arrays, dtypes, masks and key order), without its per-key
-        throwaway mask array and repeated look-ups: it runs for every key of every env's info on
-        every step."""
-        n = self.num_envs
-        for key, value in env_info.items():
-            if key == "final_obs":
-                array = vector_infos.get(key)
-                if array is None:
-                    array = np.full(n, fill_value=None, dtype=object)
-                array[env_num] = value
-            elif isinstance(value, dict):
-                array = self._add_info(vector_infos.get(key, {}), value, env_num)
-            else:
-                array = vector_infos[key] if key in vector_infos else _info_array(value, n)
-                array[env_num] = value
-            mask_key = f"_{key}"
-            mask = vector_infos.get(mask_key)
-            if mask is None:
-                mask = np.zeros(n, dtype=np.bool_)
-            mask[env_num] = True
-            vector_infos[key], vector_infos[mask_key] = array, mask
-        return vector_infos
-
-    def _batch_infos(self, entries: list) -> dict:
-        """`_add_info` of each (env index, info) in order, key by key: one array, one mask and one
-        assignment per key for all envs instead of per env (same arrays, dtypes, masks and key
-        order; a key whose values mix dicts and non-dicts takes `_add_info` env by env)."""
-        same = _same_keys(entries, self.num_envs, self._batch_infos)
-        if same is not None:
-            return same
-        columns: dict = {}
-        for i, info in entries:
-            for key, value in info.items():
-                column = columns.get(key)
-                if column is None:
-                    columns[key] = [(i, value)]
-                else:
-                    column.append((i, value))
-        n = self.num_envs
-        out: dict = {}
-        for key, column in columns.items():
-            kinds = {isinstance(v, dict) for _, v in column}
-            if key == "final_obs":
-                array = np.full(n, fill_value=None, dtype=object)
-                for i, v in column:
-                    array[i] = v
-            elif len(kinds) > 1:
-                sequential: dict = {}
-                for i, info in entries:
-                    sequential = self._add_info(sequential, info, i)
-                return sequential
-            elif kinds == {True}:
-                array = self._batch_infos(column)
-            else:
-                array = _info_column(column, n)
-            mask = np.zeros(n, dtype=np.bool_)
-            mask[[i for i, _ in column]] = True
-            out[key], out[f"_{key}"] = array, mask
-        return out
+        """`VectorEnv._add_info`, cheaper (`vector_infos.add_info`)."""
+        return add_info(vector_infos, env_info, env_num, self.num_envs)
 
     def _batched_obs(self) -> dict:
         """Gymnasium's `concatenate` of the envs' observations: for a dict of boxes (every env's)
@@ -500,6 +443,23 @@ class MorphoSimVectorEnv(VectorEnv):
         return int(i)
 
 
+class _StepState:
+    """What one vector step gathers as its envs are advanced and finished."""
+
+    __slots__ = ("acts", "checked", "extra", "rewards", "terms", "truncs", "reset_out", "stepped", "infos")
+
+    def __init__(self, acts: list, n: int) -> None:
+        self.acts = acts                         # each env's action as checked (`_checked_actions`)
+        self.checked: dict = {}                  # stepping env -> its action as its env takes it
+        self.extra: dict = {}                    # stepping env -> info keys of its `LanguagePerturbation`
+        self.rewards = np.zeros(n, dtype=np.float64)
+        self.terms = np.zeros(n, dtype=bool)
+        self.truncs = np.zeros(n, dtype=bool)
+        self.reset_out: dict = {}                # resetting env -> (observation, info)
+        self.stepped: list = []                  # stepping envs, in the order they were finished
+        self.infos = InfoBatch(n)                # every env's info, batched as it comes
+
+
 def vector_entry_point(kind: str) -> Callable[..., MorphoSimVectorEnv]:
     """The `vector_entry_point` of a task kind's ids: `MorphoSimVectorEnv` with that kind."""
     if kind not in ENTRY_POINTS:
@@ -530,16 +490,6 @@ def _runs(items: list, keys: list) -> list:
     return runs
 
 
-def _info_array(value: Any, n: int) -> np.ndarray:
-    """The batch array `VectorEnv._add_info` makes for an info value: numbers and bools by their
-    type, arrays by shape and dtype, anything else as objects."""
-    if type(value) in (int, float, bool) or issubclass(type(value), np.number):
-        return np.zeros(n, dtype=type(value))
-    if isinstance(value, np.ndarray):
-        return np.zeros((n, *value.shape), dtype=value.dtype)
-    return np.full(n, fill_value=None, dtype=object)
-
-
 def _checked_batch(actions: Any, n: int, shape: tuple) -> Optional[np.ndarray]:
     """`check_action` of every row of a finite [n, *shape] numeric array at once (the same float64
     values, clipped); None for anything else (then each env's action is checked on its own, and
@@ -550,65 +500,6 @@ def _checked_batch(actions: Any, n: int, shape: tuple) -> Optional[np.ndarray]:
     if not np.isfinite(a).all():
         return None
     return np.clip(a, -1.0, 1.0)
-
-
-def _same_keys(entries: list, n: int, batch: Callable[[list], dict]) -> Optional[dict]:
-    """`_batch_infos` of infos that all have the same keys in the same order (every step but the
-    few with resets: the per-step path), or None when they do not, or when a key's values are
-    not all dicts or all non-dicts (the general path then batches them). Nested dicts go to
-    `batch` (`_batch_infos`)."""
-    if not entries:
-        return None
-    infos = [info for _, info in entries]
-    keys = list(infos[0])
-    if any(type(info) is not dict or list(info) != keys for info in infos):
-        return None
-    index = [i for i, _ in entries]
-    everyone = index == list(range(n))
-    present = np.zeros(n, dtype=np.bool_)
-    present[index] = True
-    out: dict = {}
-    for key in keys:
-        values = [info[key] for info in infos]
-        if key != "final_obs" and type(values[0]) is dict:
-            if not all(type(v) is dict for v in values):
-                return None
-            array = batch(list(zip(index, values)))
-        elif key != "final_obs" and any(type(v) is dict for v in values):
-            return None
-        elif key == "final_obs":
-            array = np.full(n, fill_value=None, dtype=object)
-            for i, v in zip(index, values):
-                array[i] = v
-        else:
-            array = _info_values(index, values, n, everyone)
-        out[key], out[f"_{key}"] = array, present.copy()
-    return out
-
-
-def _info_values(index: list, values: list, n: int, everyone: bool) -> np.ndarray:
-    """The batch array of one info key from env `index`'s `values` (`_info_column`'s array)."""
-    first = values[0]
-    kind = type(first)
-    if everyone and (kind is float or kind is bool or kind is int) and all(type(v) is kind for v in values):
-        return np.array(values, dtype=kind)
-    return _info_column(list(zip(index, values)), n)
-
-
-def _info_column(column: list, n: int) -> np.ndarray:
-    """The batch array of one info key from its (env index, value) pairs, as `_info_array` and
-    one assignment per env make it; values of the first one's type (and shape) go in at once."""
-    first = column[0][1]
-    array = _info_array(first, n)
-    kind = type(first)
-    if array.dtype != object and all(type(v) is kind for _, v in column) and (
-            kind is not np.ndarray or all(v.shape == first.shape and v.dtype == first.dtype for _, v in column)):
-        values = [v for _, v in column]
-        array[[i for i, _ in column]] = np.stack(values) if kind is np.ndarray else values
-        return array
-    for i, v in column:
-        array[i] = v
-    return array
 
 
 def _make_envs(creator: Callable[..., gym.Env], kwargs: Mapping[str, Any],

@@ -354,6 +354,17 @@ class PendingRender:
             i = j
         return out
 
+    def first_ready(self, spans: Sequence[tuple[int, int]], timeout_s: float = 600.0) -> int:
+        """The position in `spans` of the first (lo, hi) whose views lo..hi - 1 of the closed batch
+        are all rendered; meanwhile this thread renders views nobody has claimed, the last one
+        first, so a caller that uses the spans in any order (`partial(lo, hi)` of the span given)
+        works on the first views while the helpers render the rest (`TimeoutError` after
+        `timeout_s` seconds of waiting)."""
+        if not self._closed:
+            raise RuntimeError("Expected a closed batch before its outputs, found it open (close() it first)")
+        return self._helpers.first_ready([[w for w in self._where[lo:hi] if isinstance(w, tuple)] for lo, hi in spans],
+                                         timeout_s)
+
     def __del__(self) -> None:
         batch = getattr(self, "_batch", None)
         if batch is not None:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from morphosim_gym.envs import ENV_IDS, LanguagePerturbation, MorphoSimVectorEnv, make_vec
+from morphosim_gym.envs.vector_infos import InfoBatch, batch_infos
 from tests.envs.conftest import FAST, PROMPT, make
 
 N = 2
@@ -292,21 +293,46 @@ def test_the_vector_info_batching_equals_gymnasiums():
         ours = fast._add_info(ours, info, i)
         theirs = plain._add_info(theirs, info, i)
     assert _deep_equal(ours, theirs)
-    # the step's key-by-key batching (`_batch_infos`) gives the same, in any env order; with
-    # values of mixed types in a key (int and float "t", np.int64 and int "step") and arrays
+    # the step's key-by-key batching (`batch_infos`) and the env-by-env `InfoBatch` give the same,
+    # in any env order; with values of mixed types in a key (int and float "t", np.int64 and int
+    # "step") and arrays
     order = [2, 0, 1]
+
+    def both(given: list, added: list = None) -> list:
+        batch = InfoBatch(3)
+        for i in added or order:
+            batch.add(i, given[i])
+        return [batch_infos([(i, given[i]) for i in order], 3), batch.result(order=order)]
+
     theirs = {}
     for i in order:
         theirs = plain._add_info(theirs, infos[i], i)
-    assert _deep_equal(fast._batch_infos([(i, infos[i]) for i in order]), theirs)
-    same_type = [{"t": 0.5 * i, "pos": np.arange(3.0) + i, "ok": bool(i % 2), "k": np.float32(i)} for i in range(3)]
+    assert all(_deep_equal(ours, theirs) for ours in both(infos))
+    same_type = [{"t": 0.5 * i, "pos": np.arange(3.0) + i, "ok": bool(i % 2), "k": np.float32(i), "s": f"x{i}",
+                  "cameras": {"eye": {"K": np.eye(3) * i, "width": 84}}, "final_obs": [i] * i,
+                  "id_to_name": {0: "ground", i: "ball"}} for i in range(3)]
     theirs = {}
     for i in order:
         theirs = plain._add_info(theirs, same_type[i], i)
-    assert _deep_equal(fast._batch_infos([(i, same_type[i]) for i in order]), theirs)
+    for added in ([2, 0, 1], [0, 1, 2], [1, 2, 0]):             # filled as added, batched in `order`'s
+        assert all(_deep_equal(ours, theirs) for ours in both(same_type, added))
+    # a value of another type (an int "t", a float32 "pos") in the env batched first but added last:
+    # the same (its type makes the array, as in Gymnasium), batched at the end
+    for key, value in (("t", 3), ("pos", np.zeros(3, np.float32)), ("k", 1.0),
+                       ("cameras", {"eye": {"K": np.eye(3), "width": 8.0}})):
+        odd = [dict(info) for info in same_type]
+        odd[2][key] = value
+        theirs = {}
+        for i in order:
+            theirs = plain._add_info(theirs, odd[i], i)
+        assert all(_deep_equal(ours, theirs) for ours in both(odd, [0, 1, 2]))
     mixed = [{"x": {"a": 1}}, {"x": 2}]                       # a dict, then not: env by env
-    assert _deep_equal(fast._batch_infos(list(enumerate(mixed))), fast._add_info(fast._add_info({}, mixed[0], 0),
-                                                                                   mixed[1], 1))
+    sequential = fast._add_info(fast._add_info({}, mixed[0], 0), mixed[1], 1)
+    assert _deep_equal(batch_infos(list(enumerate(mixed)), 3), sequential)
+    batch = InfoBatch(3)
+    batch.add(0, mixed[0])
+    batch.add(1, mixed[1])
+    assert _deep_equal(batch.result(), sequential)
 
 
 def test_autoresets_join_the_batched_render(monkeypatch):

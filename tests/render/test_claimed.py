@@ -98,6 +98,53 @@ def test_partial_outputs_come_view_range_by_range_and_match(helpers):
         batch.outputs(0, 3)
 
 
+def test_views_claimed_from_both_ends_are_each_rendered_once_and_match():
+    # the vector env's thread takes views from the last while a helper takes them from the first:
+    # every view once, by either, and the serial images
+    views = _views(_SPECS)
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    ref = ClaimedBatch(bvs)
+    ref.work()
+    batch = ClaimedBatch(bvs)
+    assert batch.work(limit=2, last_first=True) == 2
+    assert batch.views_done(len(views) - 2, len(views)) and not batch.views_done(0, 1)   # the last two
+    assert batch.work(limit=1) == 1 and batch.views_done(0, 1)                           # then the first
+    for _ in range(5):
+        batch = ClaimedBatch(bvs)
+        counts = []
+        worker = threading.Thread(target=lambda: counts.append(batch.work()))
+        worker.start()
+        while batch.work(1, last_first=True):
+            counts.append(1)
+        worker.join()
+        assert sum(counts) == len(views) and batch.finished and not batch.claimable
+        for a, b in zip(batch.outputs(), ref.outputs()):
+            for k in ("rgb", "depth", "alpha", "instance"):
+                assert np.array_equal(a[k], b[k]), k
+
+
+@pytest.mark.parametrize("helpers", [0, 1])
+def test_first_ready_gives_a_span_whose_views_are_rendered(helpers):
+    views = _views(_SPECS)
+    ref = render_batch(views)
+    pool = RenderHelpers(helpers)
+    try:
+        pending = submit_batch(views, helpers=pool)
+        left = [(k, k + 1) for k in range(len(views))]
+        got = {}
+        while left:
+            lo, hi = left.pop(pending.first_ready(left, 30))
+            got[lo] = pending.partial(lo, hi, 30)[0]
+        if helpers == 0:                            # this thread alone: from the last view to the first
+            assert list(got) == list(range(len(views)))[::-1]
+        with pytest.raises(RuntimeError, match="closed batch"):
+            open_batch(helpers=pool).first_ready([(0, 1)])
+    finally:
+        pool.close()
+    for k, b in enumerate(ref):
+        _assert_same(got[k], b)
+
+
 def _wait(cond, seconds: float = 60.0) -> bool:
     deadline = time.monotonic() + seconds
     while not cond():

@@ -40,9 +40,10 @@ _WAIT_S = 600.0            # a helper that takes longer over its last view is hu
 _HANDOVER_SPINS = 10_000   # ~50-100 us of looking for a helper to start on a batch (`RenderHelpers.handover`)
 _HANDOVER_NAPS = 10        # then this many `_POLL_S` sleeps
 _SERVE_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for an open batch's next view before a helper sleeps
+_READY_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for a helper's view to be done before sleeping between looks
 
 # the batch's shared counters (int64, changed only atomically once a thread may be working)
-_NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED = range(5)
+_NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED, _CLAIMED = range(6)
 
 
 @jit
@@ -94,28 +95,42 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
 
 
 @jit
-def _work(state,          # [5] int64: next view to claim, views finished, views published, closed, threads entered
+def _work(state,          # [6] int64: next view (in order), views finished, published, closed, threads entered, claimed
           limit,          # most views this call renders (< 0: no limit)
           spin,           # while the batch is open, look this many times for a view to be published
+          last_first,     # claim the last unclaimed view first (a caller that finishes views in any order)
+          claimed,        # [V] int64: 1 once view v is claimed
           vdone,          # [V] int64: 1 once view v is rendered
           longest,        # [V] int64 out: each view's longest tile list
           ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats, Ks, sizes, nears, bgs,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
-    """Claim published views one at a time (in view order) and render each, until none is left
-    to claim or `limit` are rendered; returns how many this call rendered (never waits)."""
+    """Claim published views one at a time (in view order, or the last first with `last_first`)
+    and render each, until none is left to claim or `limit` are rendered; returns how many this
+    call rendered (never waits). Each view is claimed once, by whichever thread flips its flag."""
     atomic_add(state, 4, 1)                 # _ENTERED: a thread is at work (see `RenderHelpers.handover`)
     done = 0
     idle = 0
     while limit < 0 or done < limit:
-        v = atomic_add(state, 0, 0)         # _NEXT
-        if v >= atomic_add(state, 2, 0):    # nothing published left to claim
-            if idle >= spin or atomic_add(state, 3, 0) != 0:
+        published = atomic_add(state, 2, 0)
+        if last_first:
+            v = published - 1
+            while v >= 0 and (claimed[v] != 0 or atomic_cas(claimed, v, 0, 1) != 0):
+                v -= 1
+            if v < 0:
                 break
-            idle += 1                        # open: the caller is staging the next view
-            continue
-        if atomic_cas(state, 0, v, v + 1) != v:
-            continue                         # another thread claimed v first
+        else:
+            v = atomic_add(state, 0, 0)     # _NEXT
+            if v >= published:              # nothing published left to claim
+                if idle >= spin or atomic_add(state, 3, 0) != 0:
+                    break
+                idle += 1                    # open: the caller is staging the next view
+                continue
+            if atomic_cas(state, 0, v, v + 1) != v:
+                continue                     # another thread moved past v first
+            if atomic_cas(claimed, v, 0, 1) != 0:
+                continue                     # claimed from the end already
         idle = 0
+        atomic_add(state, 5, 1)              # _CLAIMED
         longest[v] = _render_view(v, ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats,
                                   Ks, sizes, nears, bgs, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out,
                                   dummy_f, dummy_i)
@@ -138,6 +153,17 @@ def _wait_entered(state, spins):
     for _ in range(spins):
         if atomic_add(state, 4, 0) > 0:
             return True
+    return False
+
+
+@jit
+def _wait_done(vdone, views, spins):
+    """Spin (without the GIL) until one of these views is rendered, at most `spins` looks; whether
+    one is."""
+    for _ in range(spins):
+        for j in range(views.shape[0]):
+            if atomic_add(vdone, views[j], 0) != 0:
+                return True
     return False
 
 
@@ -204,7 +230,8 @@ class ClaimedBatch:
         self._alpha = np.empty(P, f32)
         self._inst = np.empty(P, np.int32)
         self._fout = np.empty(D * P, f32)
-        self._state = np.zeros(5, i64)
+        self._state = np.zeros(6, i64)
+        self._claimed = np.zeros(V, i64)
         self._wake = threading.Event()           # set on every publish and on close
         self._vdone = np.zeros(V, i64)
         self._longest = np.zeros(V, i64)
@@ -317,7 +344,7 @@ class ClaimedBatch:
     @property
     def claimable(self) -> bool:
         """Whether a published view is left for a `work` call to claim."""
-        return int(self._state[_NEXT]) < self.num_views
+        return int(self._state[_CLAIMED]) < self.num_views
 
     @property
     def entered(self) -> bool:
@@ -328,15 +355,18 @@ class ClaimedBatch:
         """Whether views lo..hi - 1 have been rendered."""
         return hi <= self.num_views and bool(self._vdone[lo:hi].all())
 
-    def work(self, limit: int = -1, spin: int = 0) -> int:
+    def work(self, limit: int = -1, spin: int = 0, last_first: bool = False) -> int:
         """Render published views of this batch until none is left to claim, or `limit` of them
         (holds no GIL while rendering; while the batch is open, looks `spin` more times for a view
-        to be published before it returns); returns how many this call rendered."""
+        to be published before it returns); returns how many this call rendered. Views are
+        claimed in view order, or with `last_first` the last unclaimed one first (a caller that
+        takes views in any order, beside helpers that take them from the first)."""
         if self._cap[0] == 0:
             return 0
-        return int(_work(self._state, int(limit), int(spin), self._vdone, self._longest, self._ranges, self._rstart, self._means,
-                         self._quats, self._scales, self._opac, self._colors, self._feat, self._ids, self._viewmats,
-                         self._Ks, self._sizes, self._nears, self._bgs, self._pix_off, self._rec, self._trect,
+        return int(_work(self._state, int(limit), int(spin), bool(last_first), self._claimed, self._vdone,
+                         self._longest, self._ranges, self._rstart, self._means, self._quats, self._scales,
+                         self._opac, self._colors, self._feat, self._ids, self._viewmats, self._Ks, self._sizes,
+                         self._nears, self._bgs, self._pix_off, self._rec, self._trect,
                          self._rgb, self._depth, self._alpha, self._inst, self._fout,
                          np.empty((1, 1), np.float32), np.empty((1, 1), np.int32)))
 
@@ -442,6 +472,34 @@ class RenderHelpers:
                 raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
             time.sleep(_POLL_S)                  # releases the GIL; a helper's view takes ~0.1-2 ms
         return batch.outputs(lo, hi)
+
+    def first_ready(self, spans: Sequence[Sequence[tuple[ClaimedBatch, int]]], timeout_s: float = _WAIT_S) -> int:
+        """The position of the first span whose views (each a (closed batch, view index) pair) are
+        all rendered. Until one is, this thread renders unclaimed views, the last one first (the
+        helpers take them from the first, so the two meet at the end of the batch and the spans
+        whose views the helpers finish meanwhile are ready at once), or waits for the helpers'."""
+        batches = list({id(b): b for span in spans for b, _ in span}.values())
+        for batch in batches:
+            _check_closed(batch)
+        deadline = None
+        while True:
+            for pos, span in enumerate(spans):
+                if all(batch._vdone[k] for batch, k in span):
+                    return pos
+            if any(batch.claimable and batch.work(1, last_first=True) for batch in reversed(batches)):
+                continue
+            if len(batches) == 1:                # a sleep oversleeps by ~50 us: spin for the helper's view first
+                views = np.array([k for span in spans for b, k in span if not b._vdone[k]], np.int64)
+                if _wait_done(batches[0]._vdone, views, _READY_SPINS):
+                    continue
+            for batch in batches:
+                if batch.error is not None:
+                    raise batch.error
+            now = time.monotonic()
+            deadline = deadline or now + timeout_s
+            if now > deadline:
+                raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
+            time.sleep(_POLL_S)                  # releases the GIL; a helper's view takes ~0.1-2 ms
 
     def close(self) -> None:
         """Stop the helper threads (a later `submit` starts new ones). A batch still open is
