@@ -31,6 +31,10 @@ assets and an HDR sky where the asset packages are installed). Modes:
 
 The table's "x single" column is each mode's median over the single env's median of the same id
 and scene kind, from this run (the issue-#23 check: `--modes single sync-8 vector-8 vector-32`).
+`--steps` counts all envs' steps together by default, so a vector env of 8 runs 1/8 of the
+single env's steps per env and most of its window is every env's first episode, which is slower
+(the pooled scenes' poses are not cached yet); `--per-env` gives every env `--steps` steps in
+every mode, as a training run sees them past its first episode.
 
 `--breakdown` times the parts of a Track step (skinning, rendering, kinematics, reward,
 observation) by calling them directly. `--ratios` measures single, vector-8, sync-8,
@@ -94,15 +98,17 @@ _MODE_TABLE = {
 }
 
 
-def measure(env_id: str, mode: str, steps: int, scenes: str = "procedural") -> float:
-    """Env steps per second of one mode (`MODES`) on one scene kind (`SCENES`)."""
+def measure(env_id: str, mode: str, steps: int, scenes: str = "procedural", per_env: bool = False) -> float:
+    """Env steps per second of one mode (`MODES`) on one scene kind (`SCENES`): over `steps` env
+    steps in all, or with `per_env` over `steps` steps of every env (a vector env of n runs
+    `steps` vector steps: each env sees as many episodes as the single env does)."""
     if mode not in _MODE_TABLE:
         raise ValueError(f"Expected a mode in {MODES}, found {mode!r}")
     how, n, kw = _MODE_TABLE[mode]
     kw = {**kw, **scene_kwargs(scenes)}
     if how is None:
         return _single(env_id, steps, **kw)
-    return _vector(env_id, max(1, steps // n), how, n=n, **kw)
+    return _vector(env_id, steps if per_env else max(1, steps // n), how, n=n, **kw)
 
 
 def vector_split(env_id: str, steps: int, n: int = 8, render_threads=None, scenes: str = "procedural") -> dict:
@@ -214,6 +220,9 @@ def main() -> None:
     ap.add_argument("--modes", nargs="*", default=list(MODES), choices=MODES)
     ap.add_argument("--scenes", nargs="*", default=list(SCENES), choices=SCENES)
     ap.add_argument("--steps", type=int, default=800, help="env steps per run (vector: total over all envs)")
+    ap.add_argument("--per-env", action="store_true",
+                    help="--steps counts each env's steps (vector envs run that many vector steps): every env "
+                         "sees as many episodes as the single env, past its first, cold episode, as in a long run")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--breakdown", action="store_true")
     ap.add_argument("--ratios", action="store_true",
@@ -227,7 +236,7 @@ def main() -> None:
     for scenes in args.scenes:
         for env_id in args.ids:
             for mode in args.modes:
-                rates = [measure(env_id, mode, args.steps, scenes) for _ in range(args.repeats)]
+                rates = [measure(env_id, mode, args.steps, scenes, args.per_env) for _ in range(args.repeats)]
                 row = {"id": env_id, "scenes": scenes, "mode": mode, "steps_per_s": round(statistics.median(rates), 1),
                        "min": round(min(rates), 1), "max": round(max(rates), 1), "runs": [round(r, 1) for r in rates]}
                 rows.append(row)
@@ -241,7 +250,8 @@ def main() -> None:
         print(f"| {r['id']} | {r['scenes']} | {r['mode']} | {r['steps_per_s']:.0f} | {r['min']:.0f} | {r['max']:.0f} "
               f"| {ratio} |")
     result = {"rows": rows, "settings": {"obs": "rgb 84x84 + proprio", "detail": 0.35, "control_hz": 10,
-                                         "scene_pool": 8, "steps_per_run": args.steps, "repeats": args.repeats},
+                                         "scene_pool": 8, "steps_per_run": args.steps, "steps_per_env": args.per_env,
+                                         "repeats": args.repeats},
               "machine": machine()}
     if args.breakdown:
         result["track_step_breakdown_ms"] = breakdown()
