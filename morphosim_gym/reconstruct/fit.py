@@ -255,8 +255,10 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         if cfg.w_mask_iou > 0:
             loss = loss + cfg.w_mask_iou * mask_iou_loss(soft, onehot_t, data.mask_valid[t], weight=conf_t)
         loss = loss + cfg.w_empty * empty_alpha_loss(alpha, data.depth[t] <= 0)
-        # depth but no instance: translucent matter, drawn but thinner than the background behind it
-        loss = loss + cfg.w_empty * empty_alpha_loss(torch.relu(alpha - 0.5), ~data.mask_valid[t])
+        # depth but no instance: translucent matter, drawn but thinner than the background behind it;
+        # not along masks' outlines (an estimated mask a pixel or two short leaves a gap there)
+        unlabelled = ~data.mask_valid[t] if conf_t is None else ~data.mask_valid[t] & (conf_t >= 1.0)
+        loss = loss + cfg.w_empty * empty_alpha_loss(torch.relu(alpha - 0.5), unlabelled)
         if model.node_trans.shape[1]:
             if tracks is not None:
                 pts, tn, tw, tuv, tvis, tidx = tracks
