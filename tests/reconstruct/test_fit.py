@@ -115,3 +115,21 @@ def test_the_gaps_along_estimated_mask_outlines_stay_drawn(clip):
                 eroded[t][keep.astype(bool)] = inst
     assert ((eroded < 0) & (clip.masks >= 0)).sum() > 100
     assert _outline_gap_alpha(clip, eroded) > 0.9
+
+
+def test_the_outline_of_exact_masks_counts_less_in_the_fit(clip):
+    # the generator's exact masks (ground-truth priors): the fit still weighs their outline pixels
+    # down (they mix two objects' colours), and their tracks fully
+    from morphosim_gym.priors import prepare_priors
+    from morphosim_gym.reconstruct.fit import ClipTensors
+
+    exact = prepare_priors(clip, "ground_truth")
+    data = ClipTensors(exact, sorted(int(i) for i in np.unique(exact.masks) if i >= 0), confidence=True)
+    w = data.mask_weight.numpy()
+    inner = np.ones((3, 3), np.uint8)
+    import cv2
+
+    outline = np.stack([cv2.dilate(m.astype(np.uint8), inner) != cv2.erode(m.astype(np.uint8), inner)
+                        for m in (exact.masks == exact.masks.max())])
+    assert w[outline].max() < 1.0 and w.max() == 1.0 and data.track_weight is None
+    assert ClipTensors(exact, [0], confidence=False).mask_weight is None
