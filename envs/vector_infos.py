@@ -42,12 +42,19 @@ def add_info(vector_infos: dict, env_info: dict, env_num: int, n: int) -> dict:
 
 
 def batch_infos(entries: list, n: int) -> dict:
-    """`add_info` of each (env index, info) in order, key by key: one array, one mask and one
-    assignment per key for all envs instead of per env (same arrays, dtypes, masks and key
-    order; a key whose values mix dicts and non-dicts takes `add_info` env by env)."""
-    same = _same_keys(entries, n)
-    if same is not None:
-        return same
+    """`add_info` of each (env index, info) in order, key by key: one array and one mask per key
+    for all envs instead of per env (same arrays, dtypes, masks and key order). Infos of the same
+    keys and value types fill the arrays at once (`InfoBatch`); others go column by column
+    (`_batch_columns`)."""
+    batch = InfoBatch(n)
+    for i, info in entries:
+        batch.add(i, info)
+    return batch.result()
+
+
+def _batch_columns(entries: list, n: int) -> dict:
+    """`batch_infos` of infos whose keys or value types differ: key by key over the envs that
+    have it (a key whose values mix dicts and non-dicts takes `add_info` env by env)."""
     columns: dict = {}
     for i, info in entries:
         for key, value in info.items():
@@ -140,8 +147,9 @@ class InfoBatch:
     While every info has the first one's keys (in order, at every level but nested dicts whose
     keys differ between envs, such as "id_to_name") and values of the first one's types, each
     `add` writes its values into the batch arrays at once and `result` only makes the masks;
-    otherwise `result` batches all the infos at the end with `batch_infos`, in the order given
-    there. Either way the result is `batch_infos`'s (same arrays, dtypes, masks, key order).
+    otherwise `result` batches all the infos at the end key by key, in the order given there.
+    Either way the result is what `add_info` env by env gives (same arrays, dtypes, masks, key
+    order).
     """
 
     def __init__(self, n: int) -> None:
@@ -172,7 +180,7 @@ class InfoBatch:
             position = {i: k for k, (i, _) in enumerate(entries)}
             entries = [entries[position[i]] for i in order]
         if not self._ok or self._level is None:
-            return batch_infos(entries, self.n)
+            return _batch_columns(entries, self.n)
         return self._level.result(self._present, entries, (), self.n)
 
 
@@ -190,48 +198,6 @@ def _info_array(value: Any, n: int) -> np.ndarray:
     if isinstance(value, np.ndarray):
         return np.zeros((n, *value.shape), dtype=value.dtype)
     return np.full(n, fill_value=None, dtype=object)
-
-
-def _same_keys(entries: list, n: int) -> Optional[dict]:
-    """`batch_infos` of infos that all have the same keys in the same order (every step but the
-    few with resets: the per-step path), or None when they do not, or when a key's values are
-    not all dicts or all non-dicts (the general path then batches them)."""
-    if not entries:
-        return None
-    infos = [info for _, info in entries]
-    keys = list(infos[0])
-    if any(type(info) is not dict or list(info) != keys for info in infos):
-        return None
-    index = [i for i, _ in entries]
-    everyone = index == list(range(n))
-    present = np.zeros(n, dtype=np.bool_)
-    present[index] = True
-    out: dict = {}
-    for key in keys:
-        values = [info[key] for info in infos]
-        if key != "final_obs" and type(values[0]) is dict:
-            if not all(type(v) is dict for v in values):
-                return None
-            array = batch_infos(list(zip(index, values)), n)
-        elif key != "final_obs" and any(type(v) is dict for v in values):
-            return None
-        elif key == "final_obs":
-            array = np.full(n, fill_value=None, dtype=object)
-            for i, v in zip(index, values):
-                array[i] = v
-        else:
-            array = _info_values(index, values, n, everyone)
-        out[key], out[f"_{key}"] = array, present.copy()
-    return out
-
-
-def _info_values(index: list, values: list, n: int, everyone: bool) -> np.ndarray:
-    """The batch array of one info key from env `index`'s `values` (`_info_column`'s array)."""
-    first = values[0]
-    kind = type(first)
-    if everyone and (kind is float or kind is bool or kind is int) and all(type(v) is kind for v in values):
-        return np.array(values, dtype=kind)
-    return _info_column(list(zip(index, values)), n)
 
 
 def _info_column(column: list, n: int) -> np.ndarray:

@@ -139,6 +139,8 @@ def test_first_ready_gives_a_span_whose_views_are_rendered(helpers):
             assert list(got) == list(range(len(views)))[::-1]
         with pytest.raises(RuntimeError, match="closed batch"):
             open_batch(helpers=pool).first_ready([(0, 1)])
+        with pytest.raises(ValueError, match="at least one span"):
+            pending.first_ready([], 30)
     finally:
         pool.close()
     for k, b in enumerate(ref):

@@ -466,11 +466,7 @@ class RenderHelpers:
             if batch.claimable:
                 batch.work(1)
                 continue
-            now = time.monotonic()
-            deadline = deadline or now + timeout_s
-            if now > deadline:
-                raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
-            time.sleep(_POLL_S)                  # releases the GIL; a helper's view takes ~0.1-2 ms
+            deadline = _nap([batch], deadline, timeout_s)
         return batch.outputs(lo, hi)
 
     def first_ready(self, spans: Sequence[Sequence[tuple[ClaimedBatch, int]]], timeout_s: float = _WAIT_S) -> int:
@@ -478,6 +474,8 @@ class RenderHelpers:
         all rendered. Until one is, this thread renders unclaimed views, the last one first (the
         helpers take them from the first, so the two meet at the end of the batch and the spans
         whose views the helpers finish meanwhile are ready at once), or waits for the helpers'."""
+        if not spans:
+            raise ValueError("Expected at least one span of views to wait for, found none")
         batches = list({id(b): b for span in spans for b, _ in span}.values())
         for batch in batches:
             _check_closed(batch)
@@ -492,14 +490,7 @@ class RenderHelpers:
                 views = np.array([k for span in spans for b, k in span if not b._vdone[k]], np.int64)
                 if _wait_done(batches[0]._vdone, views, _READY_SPINS):
                     continue
-            for batch in batches:
-                if batch.error is not None:
-                    raise batch.error
-            now = time.monotonic()
-            deadline = deadline or now + timeout_s
-            if now > deadline:
-                raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
-            time.sleep(_POLL_S)                  # releases the GIL; a helper's view takes ~0.1-2 ms
+            deadline = _nap(batches, deadline, timeout_s)
 
     def close(self) -> None:
         """Stop the helper threads (a later `submit` starts new ones). A batch still open is
@@ -559,6 +550,21 @@ class RenderHelpers:
 
     def __setstate__(self, state: dict) -> None:
         self.__init__(state["helpers"])
+
+
+def _nap(batches: Sequence[ClaimedBatch], deadline: Optional[float], timeout_s: float) -> float:
+    """One short sleep of a thread waiting for helpers' views (it releases the GIL; a view takes
+    ~0.1-2 ms), after raising a helper's error or a `TimeoutError` past the deadline (set
+    `timeout_s` from the first nap); returns the deadline."""
+    for batch in batches:
+        if batch.error is not None:
+            raise batch.error
+    now = time.monotonic()
+    deadline = deadline or now + timeout_s
+    if now > deadline:
+        raise TimeoutError(f"Expected the render helpers to finish within {timeout_s} s, found them busy")
+    time.sleep(_POLL_S)
+    return deadline
 
 
 def _check_closed(batch: ClaimedBatch) -> None:
