@@ -278,8 +278,8 @@ class PendingRender:
         if not batch.add_parts(parts, *view):
             raise AssertionError("a batch sized for a view must hold it")
         self._batch = batch
-        self._helpers.submit(batch)
-        self._helpers.handover(batch)        # a helper renders this view while the caller prepares the next
+        self._helpers.submit(batch, post=False)
+        self._helpers.handover(batch)        # posts it; a helper renders this view while the caller prepares the next
         return self._staged_into(parts, cam, 0)
 
     def _staged_into(self, parts: list, cam: Camera, k: int) -> tuple:

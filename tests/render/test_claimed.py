@@ -291,3 +291,77 @@ def test_closing_the_helpers_does_not_wait_for_an_open_batch():
     closer.start()
     closer.join(30.0)
     assert not closer.is_alive() and batch.closed
+
+
+def _frozen(g: ms.Gaussians) -> ms.Gaussians:
+    """A copy of g whose arrays are read-only, as `Scene4D.at` gives them."""
+    arrays = {k: np.array(getattr(g, k)) for k in ("means", "quats", "scales", "opacities", "colors", "object_ids")}
+    for a in arrays.values():
+        a.setflags(write=False)
+    return ms.Gaussians(**arrays)
+
+
+def test_frozen_parts_are_read_in_place_and_writable_ones_copied_at_add():
+    # a view's read-only float32 parts are not copied (the kernels read them where they are); a
+    # part the caller may still write is copied when it is added, so a later change never shows
+    views = _views(_SPECS[:4])
+    frozen = [(_frozen(g), cam, bg) for g, cam, bg in views[:2]]
+    writable = [(ms.Gaussians(means=g.means.copy(), quats=g.quats.copy(), scales=g.scales.copy(),
+                              opacities=g.opacities.copy(), colors=g.colors.copy(), object_ids=g.object_ids.copy()),
+                 cam, bg) for g, cam, bg in views[2:]]
+    pending = open_batch(capacity=(4, 20_000, 4 * 100 * 100))
+    for view in frozen + writable:
+        pending.add(view)
+    batch = pending._where[0][0]
+    kept = [a for part in batch._kept for a in part]
+    assert any(a is frozen[0][0].means for a in kept) and any(a is frozen[1][0].colors for a in kept)
+    assert not any(a is writable[0][0].means for a in kept)
+    for g, _, _ in writable:                      # the caller reuses its buffers before the render
+        g.colors[:] = 0.0
+        g.means[:] += 5.0
+    pending.close()
+    for (g, cam, bg), out in zip(views, pending.result()):
+        _assert_same(out, ms.render(g, cam, background=bg))
+
+
+def test_a_view_of_more_parts_than_a_batch_keeps_rows_for_is_composited_the_same():
+    views = _views(_SPECS[:3])
+    g0, g1 = _frozen(views[0][0]), views[1][0]
+    parts = [g0, g1, g0, g1, g0, g1]              # more than the 4 source rows a one-view batch keeps
+    cam, bg = views[2][1], views[2][2]
+    pool = RenderHelpers(1)
+    try:
+        pending = open_batch(helpers=pool, capacity=(1, 10, 10))
+        pending.add((parts, cam, bg))
+        pending.add((parts[:2], views[0][1], views[0][2]))               # a second batch
+        got = pending.result()
+    finally:
+        pool.close()
+    _assert_same(got[0], ms.render(parts, cam, background=bg))
+    _assert_same(got[1], ms.render(parts[:2], views[0][1], background=views[0][2]))
+
+
+def test_a_batch_submitted_unposted_and_never_handed_over_is_still_rendered():
+    # `submit(post=False)` leaves the post to `handover`; a helper looking for work without the GIL
+    # must still take a batch nobody posts, once its look is over
+    views = _views(_SPECS[:2])
+    bvs = [batch_view([g], c.world_to_camera, c.K, c.near, c.width, c.height, bg) for g, c, bg in views]
+    pool = RenderHelpers(1)
+    try:
+        for _ in range(3):
+            batch = pool.submit(ClaimedBatch(bvs), post=False)
+            assert _wait(lambda: batch.finished, 30.0)     # the helper alone renders it
+            for out, (g, cam, bg) in zip(batch.outputs(), views):
+                assert np.array_equal(out["rgb"], ms.render(g, cam, background=bg).rgb)
+    finally:
+        pool.close()
+
+
+def test_a_helper_looking_for_the_next_batch_sees_a_post_and_reports_how_long_it_looked():
+    from morphosim_gym.render.cpu.claimed import _bump, _wait_posted
+
+    posted = np.zeros(1, np.int64)
+    assert _wait_posted(posted, 0, 1000) == -1            # nothing posted: the whole look, then -1
+    _bump(posted, 0)
+    assert _wait_posted(posted, 0, 1000) == 0
+    assert _wait_posted(posted, 1, 1000) == -1

@@ -33,7 +33,7 @@ FOV_CLAMP = 1.3
 EXTENT_MARGIN = 0.05
 
 __all__ = [
-    "jit", "pjit", "splat_exp", "splat_log", "float_bits", "atomic_add", "atomic_cas",
+    "jit", "pjit", "splat_exp", "splat_log", "float_bits", "atomic_add", "atomic_cas", "f32_rows", "f32_vector",
     "TILE", "ALPHA_MIN", "ALPHA_MAX", "T_MIN", "BLUR", "FOV_CLAMP", "EXTENT_MARGIN", "NREC",
     "R_MX", "R_MY", "R_CA", "R_CB", "R_CC", "R_OP", "R_Z", "R_R", "R_G", "R_B", "R_EX", "R_EY",
     "R_X0", "R_X1", "R_Y0", "R_Y1",
@@ -135,6 +135,33 @@ def atomic_cas(typingctx, arr, idx, expected, new):
         return builder.extract_value(pair, 0)
 
     return sig, codegen
+
+
+# ----------------------------------------------------------------------------- arrays in place
+@intrinsic
+def _f32_pointer(typingctx, address):
+    """A float32 pointer to a raw address (int64)."""
+    if address != types.int64:
+        return None
+    sig = types.CPointer(types.float32)(types.int64)
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+
+    return sig, codegen
+
+
+@numba.njit(**_OPTS)
+def f32_rows(address, n, k):
+    """The float32 array [n, k] (C order) at a raw address: an array the caller keeps alive and
+    unchanged while kernels read it in place (`claimed.ClaimedBatch` references frozen inputs)."""
+    return numba.carray(_f32_pointer(address), (n, k))
+
+
+@numba.njit(**_OPTS)
+def f32_vector(address, n):
+    """The float32 array [n] at a raw address (as `f32_rows`)."""
+    return numba.carray(_f32_pointer(address), n)
 
 
 # ----------------------------------------------------------------------------- exp / log

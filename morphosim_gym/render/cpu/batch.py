@@ -81,7 +81,7 @@ def _project_items(items,      # [n_items, 3] int64: view, lo, hi (global Gaussi
                    counts):    # [n_items, max_tiles] int32 out
     for k in prange(items.shape[0]):
         v = items[k, 0]
-        _project_range(items[k, 1], items[k, 2], means, quats, scales, opacities, colors, feat, viewmats[v], Ks[v],
+        _project_range(items[k, 1], items[k, 2], 0, means, quats, scales, opacities, colors, feat, viewmats[v], Ks[v],
                        sizes[v, 0], sizes[v, 1], nears[v], rec, trect, sizes[v, 2], counts[k])
 
 
@@ -91,7 +91,7 @@ def _project_items_serial(items, means, quats, scales, opacities, colors, feat, 
     """`_project_items` on the calling thread (small batches: no parallel region to join)."""
     for k in range(items.shape[0]):
         v = items[k, 0]
-        _project_range(items[k, 1], items[k, 2], means, quats, scales, opacities, colors, feat, viewmats[v], Ks[v],
+        _project_range(items[k, 1], items[k, 2], 0, means, quats, scales, opacities, colors, feat, viewmats[v], Ks[v],
                        sizes[v, 0], sizes[v, 1], nears[v], rec, trect, sizes[v, 2], counts[k])
 
 

@@ -25,7 +25,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ._jit import NREC, atomic_add, atomic_cas, jit
+from ._jit import NREC, atomic_add, atomic_cas, f32_rows, f32_vector, jit
 from .batch import _MAX_TILE_LIST, BatchView, Staged, view_outputs
 from .binning import bin_offsets, plan_tiles, sorted_fill
 from .cull import cull_view
@@ -41,6 +41,9 @@ _HANDOVER_SPINS = 10_000   # ~50-100 us of looking for a helper to start on a ba
 _HANDOVER_NAPS = 10        # then this many `_POLL_S` sleeps
 _SERVE_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for an open batch's next view before a helper sleeps
 _READY_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for a helper's view to be done before sleeping between looks
+_IDLE_SPINS = (30_000, 400_000)   # ~0.3-4 ms of looking (no GIL) for the next batch before a helper sleeps
+
+_PARTS_PER_VIEW = 4        # source rows a batch sized by capacity keeps per view (a view with more: concatenated)
 
 # the batch's shared counters (int64, changed only atomically once a thread may be working)
 _NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED, _CLAIMED = range(6)
@@ -48,8 +51,11 @@ _NEXT, _FINISHED, _PUBLISHED, _CLOSED, _ENTERED, _CLAIMED = range(6)
 
 @jit
 def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, view by view
+                 rsrc,         # [k] int64: the row of `src` each range's inputs are read from
                  rstart,       # [V + 1] int64: view v's ranges are ranges[rstart[v]:rstart[v + 1]]
-                 means, quats, scales, opacities, colors, feat, ids,
+                 src,          # [S, 7] int64: first Gaussian index, count, then the addresses of means,
+                               # quats, scales, opacities and colors (float32, C order) of each input part
+                 feat, ids,    # [N, D] float32, [N] int32 staged
                  viewmats,     # [V, 4, 4]
                  Ks,           # [V, 3, 3]
                  sizes,        # [V, 3] int64: width, height, tiles_x
@@ -68,8 +74,11 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
     nr = rstart[v + 1] - r0
     counts = np.zeros((max(nr, 1), nt), np.int32)
     for r in range(nr):
-        _project_range(ranges[r0 + r, 0], ranges[r0 + r, 1], means, quats, scales, opacities, colors, feat,
-                       viewmats[v], Ks[v], w, h, nears[v], rec, trect, tx, counts[r])
+        s = rsrc[r0 + r]
+        m = src[s, 1]
+        _project_range(ranges[r0 + r, 0], ranges[r0 + r, 1], src[s, 0], f32_rows(src[s, 2], m, 3),
+                       f32_rows(src[s, 3], m, 4), f32_rows(src[s, 4], m, 3), f32_vector(src[s, 5], m),
+                       f32_rows(src[s, 6], m, 3), feat, viewmats[v], Ks[v], w, h, nears[v], rec, trect, tx, counts[r])
     # tile lists in depth order (ties in index order), as the per-tile sort of every other path leaves them
     tile_start = np.empty(nt + 1, np.int64)
     off = np.empty((max(nr, 1), nt), np.int64)
@@ -102,7 +111,7 @@ def _work(state,          # [6] int64: next view (in order), views finished, pub
           claimed,        # [V] int64: 1 once view v is claimed
           vdone,          # [V] int64: 1 once view v is rendered
           longest,        # [V] int64 out: each view's longest tile list
-          ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats, Ks, sizes, nears, bgs,
+          ranges, rsrc, rstart, src, feat, ids, viewmats, Ks, sizes, nears, bgs,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
     """Claim published views one at a time (in view order, or the last first with `last_first`)
     and render each, until none is left to claim or `limit` are rendered; returns how many this
@@ -131,9 +140,8 @@ def _work(state,          # [6] int64: next view (in order), views finished, pub
                 continue                     # claimed from the end already
         idle = 0
         atomic_add(state, 5, 1)              # _CLAIMED
-        longest[v] = _render_view(v, ranges, rstart, means, quats, scales, opacities, colors, feat, ids, viewmats,
-                                  Ks, sizes, nears, bgs, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out,
-                                  dummy_f, dummy_i)
+        longest[v] = _render_view(v, ranges, rsrc, rstart, src, feat, ids, viewmats, Ks, sizes, nears, bgs,
+                                  pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i)
         atomic_add(vdone, v, 1)            # seq_cst: the view's pixels are written before its flag
         atomic_add(state, 1, 1)            # _FINISHED
         done += 1
@@ -147,13 +155,25 @@ def _bump(state, k):
 
 
 @jit
-def _wait_entered(state, spins):
-    """Spin (without the GIL) until a thread has entered `_work` on this batch, at most `spins`
-    looks; whether one has."""
+def _wait_entered(state, posted, post, spins):
+    """Count a posted batch first if `post` (`RenderHelpers.submit`), then spin (without the GIL)
+    until a thread has entered `_work` on this batch, at most `spins` looks; whether one has."""
+    if post:
+        atomic_add(posted, 0, 1)
     for _ in range(spins):
         if atomic_add(state, 4, 0) > 0:
             return True
     return False
+
+
+@jit
+def _wait_posted(posted, before, spins):
+    """Spin (without the GIL) until the count of posted batches is no longer `before`, at most
+    `spins` looks; how many looks that took (-1: it did not change)."""
+    for k in range(spins):
+        if atomic_add(posted, 0, 0) != before:
+            return k
+    return -1
 
 
 @jit
@@ -165,6 +185,47 @@ def _wait_done(vdone, views, spins):
             if atomic_add(vdone, views[j], 0) != 0:
                 return True
     return False
+
+
+@jit
+def _reference(src, s, first, means, quats, scales, opacities, colors):
+    """Source row s: Gaussians first.. are read from these arrays (float32, C order) in place."""
+    src[s, 0] = first
+    src[s, 1] = means.shape[0]
+    src[s, 2] = means.ctypes.data
+    src[s, 3] = quats.ctypes.data
+    src[s, 4] = scales.ctypes.data
+    src[s, 5] = opacities.ctypes.data
+    src[s, 6] = colors.ctypes.data
+
+
+_FROZEN_SHAPES = ((3,), (4,), (3,), (), (3,))       # row shapes of means, quats, scales, opacities, colors
+
+
+def _input_parts(fields: list, room: int) -> list:
+    """A view's non-empty parts as (means, quats, scales, opacities, colors) tuples the kernels
+    may read in place: read-only C-order float32 arrays as they are, others copied; more parts
+    than `room` source rows left are concatenated into one."""
+    parts = [tuple(f[j] for f in fields) for j in range(len(fields[0])) if len(fields[0][j])]
+    if len(parts) > max(room, 1):
+        parts = [tuple(np.concatenate([p[k] for p in parts]).astype(np.float32, copy=False) for k in range(5))]
+    out = []
+    for part in parts:
+        if all(a.dtype == np.float32 and not a.flags.writeable and a.flags.c_contiguous and a.shape[1:] == shape
+               for a, shape in zip(part, _FROZEN_SHAPES)):
+            out.append(part)
+        else:
+            out.append(tuple(np.array(a, dtype=np.float32, order="C").reshape((len(a),) + shape)
+                             for a, shape in zip(part, _FROZEN_SHAPES)))
+    return out
+
+
+def _copy_parts(buf: np.ndarray, n0: int, n1: int, parts: list) -> None:
+    """buf[n0:n1] = the parts concatenated."""
+    if len(parts) == 1:
+        buf[n0:n1] = parts[0]
+    elif parts:
+        np.concatenate(parts, out=buf[n0:n1], casting="same_kind")
 
 
 class ClaimedBatch:
@@ -199,23 +260,35 @@ class ClaimedBatch:
                 raise ValueError(f"Expected features of one dimension D in every view, found {sorted(dims)}")
             dim = dims.pop() if features and dims else 0
             capacity = (len(views), sum(v.size for v in views), sum(v.width * v.height for v in views))
+            parts = sum(len(v.means) for v in views)
         elif capacity is None:
             raise ValueError("Expected views, or a capacity (views, Gaussians, pixels) for a batch staged view by view")
+        else:
+            parts = _PARTS_PER_VIEW * max(int(capacity[0]), 0)
         V, N, P = (max(int(c), 0) for c in capacity)
         D = int(dim) if features else 0
         ws = workspace if workspace is not None else Workspace()
         f32, i64 = np.float32, np.int64
         self._cull, self._features = bool(cull), bool(features)
         self._cap = (V, N, P)
-        self._n = self._p = self._r = 0            # Gaussians, pixels and ranges used
-        self._means = ws.get("in_means", (N, 3), f32)
-        self._quats = ws.get("in_quats", (N, 4), f32)
-        self._scales = ws.get("in_scales", (N, 3), f32)
-        self._opac = ws.get("in_opacities", (N,), f32)
-        self._colors = ws.get("in_colors", (N, 3), f32)
+        self._n = self._p = self._r = self._s = 0      # Gaussians, pixels, ranges and input parts used
+        # culling reads the inputs of all views from one staged copy (source row 0); otherwise
+        # each view's parts are read in place (`_reference`): one source row per part
+        staged = N if cull else 0
+        self._means = ws.get("in_means", (staged, 3), f32)
+        self._quats = ws.get("in_quats", (staged, 4), f32)
+        self._scales = ws.get("in_scales", (staged, 3), f32)
+        self._opac = ws.get("in_opacities", (staged,), f32)
+        self._colors = ws.get("in_colors", (staged, 3), f32)
         self._ids = ws.get("in_ids", (N,), np.int32)
         self._feat = ws.get("in_features", (N, D), f32)
-        self._ranges = ws.get("ranges", (N + V if cull else V, 2), i64)
+        self._src = np.zeros((1 if cull else max(parts, 1), 7), i64)
+        self._kept: list = []                      # the arrays the source rows point into, alive with the batch
+        if cull:
+            _reference(self._src, 0, 0, self._means, self._quats, self._scales, self._opac, self._colors)
+            self._s = 1
+        self._ranges = ws.get("ranges", (N + V if cull else max(parts, 1), 2), i64)
+        self._rsrc = np.zeros(len(self._ranges), i64)
         self._rstart = np.zeros(V + 1, i64)
         self._pix_off = np.zeros(V + 1, i64)
         self._viewmats = np.zeros((V, 4, 4), f32)
@@ -271,7 +344,10 @@ class ClaimedBatch:
 
     def _add(self, fields: list, n: int, viewmat, K, near: float, width: int, height: int, background) -> bool:
         """Stage one view: `fields` are its parts' arrays per field (means, quats, scales,
-        opacities, colors, ids[, features]; an id part may be None: -1 over that part)."""
+        opacities, colors, ids[, features]; an id part may be None: -1 over that part). Read-only
+        float32 parts (the frozen arrays `Scene4D.at` gives) are read in place by the kernels, the
+        others copied first, so a caller's later change to an array it may write never reaches
+        the render."""
         if self.closed:
             raise ValueError("Expected an open batch to add a view to, found it closed")
         if self._features and any(f.shape[1] != self._feat.shape[1] for f in fields[6]):
@@ -281,15 +357,15 @@ class ClaimedBatch:
         width, height = int(width), int(height)
         npx = width * height
         V, N, P = self._cap
-        if v >= V or n0 + n > N or p0 + npx > P:
+        inputs = None if self._cull else _input_parts(fields[:5], len(self._src) - self._s)
+        if v >= V or n0 + n > N or p0 + npx > P or (inputs is not None and self._s + len(inputs) > len(self._src)):
             return False
         n1 = n0 + n
-        for buf, parts in zip((self._means, self._quats, self._scales, self._opac, self._colors, self._feat),
-                              fields[:5] + fields[6:]):
-            if len(parts) == 1:
-                buf[n0:n1] = parts[0]
-            elif parts:
-                np.concatenate(parts, out=buf[n0:n1], casting="same_kind")
+        if self._cull:
+            for buf, parts in zip((self._means, self._quats, self._scales, self._opac, self._colors), fields[:5]):
+                _copy_parts(buf, n0, n1, parts)
+        if self._features:
+            _copy_parts(self._feat, n0, n1, fields[6])
         k = n0
         for means, ids in zip(fields[0], fields[5]):
             m = len(means)
@@ -305,8 +381,16 @@ class ClaimedBatch:
                           self._viewmats[v].astype(np.float64), self._Ks[v].astype(np.float64),
                           width, height, float(self._nears[v]), self._ranges[r0:])
         elif n:
-            self._ranges[r0] = (n0, n1)
-            k = 1
+            k = 0
+            for part in inputs:
+                m = len(part[0])
+                _reference(self._src, self._s, n0, *part)
+                self._ranges[r0 + k] = (n0, n0 + m)
+                self._rsrc[r0 + k] = self._s
+                self._kept.append(part)
+                self._s += 1
+                n0 += m
+                k += 1
         else:
             k = 0
         self._n, self._p, self._r = n1, p0 + npx, r0 + k
@@ -364,9 +448,9 @@ class ClaimedBatch:
         if self._cap[0] == 0:
             return 0
         return int(_work(self._state, int(limit), int(spin), bool(last_first), self._claimed, self._vdone,
-                         self._longest, self._ranges, self._rstart, self._means, self._quats, self._scales,
-                         self._opac, self._colors, self._feat, self._ids, self._viewmats, self._Ks, self._sizes,
-                         self._nears, self._bgs, self._pix_off, self._rec, self._trect,
+                         self._longest, self._ranges, self._rsrc, self._rstart, self._src, self._feat, self._ids,
+                         self._viewmats, self._Ks, self._sizes, self._nears, self._bgs, self._pix_off, self._rec,
+                         self._trect,
                          self._rgb, self._depth, self._alpha, self._inst, self._fout,
                          np.empty((1, 1), np.float32), np.empty((1, 1), np.int32)))
 
@@ -408,9 +492,14 @@ class RenderHelpers:
         self._lock = threading.Lock()            # starting and stopping threads
         self._count = threading.Lock()           # batches' count of helpers still at work
         self._submitted: list = []               # the last two batches submitted
+        self._posted = np.zeros(1, np.int64)     # items put on every queue so far (batches, stops)
 
-    def submit(self, batch: ClaimedBatch) -> ClaimedBatch:
-        """Start the helpers on `batch` (no-op without helpers); returns it."""
+    def submit(self, batch: ClaimedBatch, post: bool = True) -> ClaimedBatch:
+        """Start the helpers on `batch` (no-op without helpers); returns it. A helper that looks
+        for its next batch without the GIL sees it once it is posted: at once, or with
+        `post=False` from the next `handover(batch)`, which posts it from its own wait without
+        the GIL (the helper then takes the GIL at once instead of waiting for it to be handed
+        over: an OS wake-up, ~0.1 ms)."""
         if self.helpers == 0:
             return batch
         self._start()
@@ -419,6 +508,9 @@ class RenderHelpers:
         self._submitted = (self._submitted + [batch])[-2:]
         for q in self._queues:
             q.put(batch)
+        batch._unposted = not post
+        if post:
+            _bump(self._posted, 0)
         return batch
 
     def handover(self, batch: ClaimedBatch, spins: int = _HANDOVER_SPINS, naps: int = _HANDOVER_NAPS) -> bool:
@@ -431,12 +523,16 @@ class RenderHelpers:
         nothing to wait for; False at once while an earlier batch still has views to render).
         A helper done with the earlier batch may still wait for the GIL to leave its `work`:
         this wait lets it."""
-        if self.helpers == 0 or batch.entered:
+        if self.helpers == 0:
             return True
+        post = getattr(batch, "_unposted", False)
+        batch._unposted = False
         earlier = self._submitted[0] if self._submitted[-1] is batch and len(self._submitted) > 1 else None
-        if earlier is not None and not earlier.finished:
-            return False                         # the helpers are rendering an earlier batch: no waiting for them
-        if _wait_entered(batch._state, int(spins)):
+        if batch.entered or (earlier is not None and not earlier.finished):
+            if post:
+                _bump(self._posted, 0)
+            return batch.entered                 # False: the helpers are rendering an earlier batch, no waiting
+        if _wait_entered(batch._state, self._posted, post, int(spins)):
             return True
         for _ in range(naps):
             time.sleep(_POLL_S)
@@ -502,6 +598,7 @@ class RenderHelpers:
             batch.close()
         for q in queues:
             q.put(None)
+        _bump(self._posted, 0)                   # a helper looking for its next batch sees the stop
         for t in threads:
             t.join()
 
@@ -516,7 +613,19 @@ class RenderHelpers:
                 t.start()
 
     def _loop(self, q: queue.SimpleQueue) -> None:
+        """Serve the batches put on `q`. Between batches look for the next one to be posted
+        without the GIL before sleeping on the queue (waking a sleeping helper costs its caller
+        ~0.1-0.3 ms in `handover`; a vector env posts its next step's batch ~0.3-1.5 ms after a
+        helper's last view): up to the longer of `_IDLE_SPINS`, or the shorter after two waits
+        in a row that found none (a caller busy between batches, e.g. a policy update, loses
+        little of its core)."""
+        low, high = _IDLE_SPINS
+        misses = 0
         while True:
+            posted = int(self._posted[0])
+            if q.empty():
+                found = _wait_posted(self._posted, posted, high if misses < 2 else low) >= 0
+                misses = 0 if found else misses + 1
             batch = q.get()
             if batch is None:
                 return

@@ -160,12 +160,13 @@ def _project_soa(n,
 
 @jit
 def _project_block(lo, hi,
+                   src,         # Gaussian i's inputs are row i - src of means ... colors
                    means,       # [N, 3]
                    quats,       # [N, 4]
                    scales,      # [N, 3]
                    opacities,   # [N]
                    colors,      # [N, 3]
-                   feat,        # [N, D] (checked finite only)
+                   feat,        # [N, D] (checked finite only; row i, like rec)
                    viewmat,     # [4, 4]
                    K,           # [3, 3]
                    width, height, near,
@@ -180,7 +181,7 @@ def _project_block(lo, hi,
     one = F(1.0)
     inf = F(np.inf)
     for j in range(n):
-        i = lo + j
+        i = lo - src + j
         buf[_IN_M0 * B + j] = means[i, 0]
         buf[_IN_M1 * B + j] = means[i, 1]
         buf[_IN_M2 * B + j] = means[i, 2]
@@ -202,9 +203,9 @@ def _project_block(lo, hi,
         rec[i, R_CC] = buf[_OUT_CC * B + j]
         rec[i, R_OP] = buf[_IN_OP * B + j]
         rec[i, R_Z] = buf[_OUT_Z * B + j]
-        cr = colors[i, 0]
-        cg = colors[i, 1]
-        cb = colors[i, 2]
+        cr = colors[i - src, 0]
+        cg = colors[i - src, 1]
+        cb = colors[i - src, 2]
         rec[i, R_R] = cr
         rec[i, R_G] = cg
         rec[i, R_B] = cb
@@ -245,14 +246,17 @@ def _project_block(lo, hi,
 
 
 @jit
-def _project_range(lo, hi, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near,
+def _project_range(lo, hi, src, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near,
                    rec, trect, tiles_x, counts):
+    """Project Gaussians lo..hi - 1 into rec[lo:hi] and trect[:, lo:hi], their inputs read from
+    rows lo - src..hi - 1 - src of means, quats, scales, opacities and colors (src = 0: the same
+    rows; a view's part read in place starts at its first Gaussian's index) and feat's rows lo..hi - 1."""
     counts[:] = 0
     buf = np.empty(_NFIELD * _BLOCK, rec.dtype)
     for b in range(lo, hi, _BLOCK):
         e = min(b + _BLOCK, hi)
-        _project_block(b, e, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near, buf,
-                       rec, trect, tiles_x, counts)
+        _project_block(b, e, src, means, quats, scales, opacities, colors, feat, viewmat, K, width, height, near,
+                       buf, rec, trect, tiles_x, counts)
 
 
 @pjit
@@ -279,7 +283,7 @@ def project_forward(means,      # [N, 3]
     n = means.shape[0]
     nthr = counts.shape[0]
     for t in prange(nthr):
-        _project_range(n * t // nthr, n * (t + 1) // nthr, means, quats, scales, opacities, colors, feat, viewmat,
+        _project_range(n * t // nthr, n * (t + 1) // nthr, 0, means, quats, scales, opacities, colors, feat, viewmat,
                        K, width, height, near, rec, trect, tiles_x, counts[t])
 
 
