@@ -509,6 +509,9 @@ def _source_parts(source: Source, t: float, background: Optional[Sequence[float]
     if background is None:
         first = next((p for p in parts if isinstance(p, Scene4D)), None)
         background = first.background if first is not None else (0.0, 0.0, 0.0)
+    if type(background) is tuple and len(background) == 3 and all(
+            type(x) is float and 0.0 <= x <= 1.0 for x in background):     # a scene's (checked): the per-view path
+        return gaussians, np.array(background), sky
     bg = np.asarray(background, dtype=np.float64)
     if bg.shape != (3,) or not np.all(np.isfinite(bg)) or bg.min() < 0 or bg.max() > 1:
         raise ValueError(f"Expected background as 3 numbers in [0, 1], found {background!r}")

@@ -30,7 +30,8 @@ AGENT_OBJECT_ID = 100          # instance id the agent's own Gaussians render wi
 POSED_MODEL_FIELDS = ("body_pos", "body_ipos", "body_quat", "geom_pos", "geom_size", "site_pos", "site_size",
                       "cam_pos", "cam_quat", "cam_fovy")
 """The `MjModel` arrays a rig changes after construction (placement, scale, zoom, world cameras)."""
-_SHARED_ATTRS = frozenset({"model", "data", "_skin", "_nominal"})   # not part of a rig's episode state
+_SHARED_ATTRS = frozenset({"model", "data", "_skin", "_nominal", "_camera_ids"})   # not part of a rig's episode state
+_EYE4 = np.eye(4)
 
 
 def _mujoco() -> Any:
@@ -51,16 +52,15 @@ def mujoco_camera(cam_xpos: np.ndarray, cam_xmat: np.ndarray, fovy: float, width
     """`Camera.from_mujoco` for the per-step hot path: the same arithmetic, without re-validating
     what MuJoCo guarantees (an orthonormal `cam_xmat`, a finite position). Equal (==) to
     `Camera.from_mujoco(cam_xpos, cam_xmat, fovy, width, height, near)`."""
-    r = np.asarray(cam_xmat, dtype=np.float64).reshape(3, 3) @ MUJOCO_TO_OPENCV     # camera -> world
-    w2c = np.eye(4)
-    w2c[:3, :3] = r.T
-    w2c[:3, 3] = -r.T @ np.asarray(cam_xpos, dtype=np.float64)
+    rt = (np.asarray(cam_xmat, dtype=np.float64).reshape(3, 3) @ MUJOCO_TO_OPENCV).T   # world -> camera
+    w2c = _EYE4.copy()
+    w2c[:3, :3] = rt
+    w2c[:3, 3] = -rt @ np.asarray(cam_xpos, dtype=np.float64)
     w2c.setflags(write=False)
     f = 0.5 * height / math.tan(math.radians(fovy) / 2.0)
     cam = object.__new__(Camera)
-    for name, value in (("width", int(width)), ("height", int(height)), ("fx", f), ("fy", f),
-                        ("cx", width / 2.0), ("cy", height / 2.0), ("world_to_camera", w2c), ("near", float(near))):
-        object.__setattr__(cam, name, value)
+    vars(cam).update(width=int(width), height=int(height), fx=f, fy=f, cx=width / 2.0, cy=height / 2.0,
+                     world_to_camera=w2c, near=float(near))    # a frozen dataclass: fields set past __setattr__
     return cam
 
 
@@ -104,6 +104,7 @@ class Rig:
         # cameras attached to the world body are posed by the env, not scaled with the rig
         self._world_cams = {i for i in range(self.model.ncam) if int(self.model.cam_bodyid[i]) == 0}
         self.scale = 1.0
+        self._camera_ids: dict[str, int] = {}    # camera name -> id, looked up once (`camera`)
         self._skin_budget = int(skin_budget)
         self._skin = None
         hinges = [j for j in range(self.model.njnt)
@@ -208,7 +209,8 @@ class Rig:
     def set_joints(self, q: Sequence[float]) -> None:
         """Set hinge/slide joint positions (clipped to their ranges)."""
         q = np.asarray(q, dtype=np.float64).reshape(len(self._qadr))
-        self.data.qpos[self._qadr] = np.clip(q, self.joint_range[:, 0], self.joint_range[:, 1])
+        r = self.joint_range
+        self.data.qpos[self._qadr] = np.minimum(np.maximum(q, r[:, 0]), r[:, 1])    # np.clip's values, cheaper
 
     def integrate_joints(self, rates: np.ndarray, dt: float) -> None:
         """Move the hinge/slide joints by `rates` (rad/s or m/s) for `dt` seconds, within their ranges."""
@@ -222,7 +224,9 @@ class Rig:
 
     def camera(self, name: str, width: int, height: int, near: float | None = None) -> Camera:
         """The named MJCF camera as a `Camera` (after `forward`); `near` defaults to 1% of the rig scale."""
-        i = self._id("camera", name)
+        i = self._camera_ids.get(name)
+        if i is None:
+            i = self._camera_ids[name] = self._id("camera", name)
         if near is None:
             near = 0.01 * self.scale if i not in self._world_cams else 0.01
         return mujoco_camera(self.data.cam_xpos[i], self.data.cam_xmat[i], float(self.model.cam_fovy[i]),

@@ -61,7 +61,8 @@ class PanTiltRig(Rig):
 
     def set_fov(self, fov_deg: float) -> None:
         """Set the zoom (vertical field of view, degrees, clipped to `fov_range`)."""
-        self.model.cam_fovy[self._cam] = float(np.clip(fov_deg, *self.fov_range))
+        lo, hi = self.fov_range
+        self.model.cam_fovy[self._cam] = min(max(float(fov_deg), lo), hi)
 
     def place(self, eye: Sequence[float], facing: Sequence[float], ground_z: float = 0.0, scale: float | None = None,
               fov_deg: float = 30.0) -> None:

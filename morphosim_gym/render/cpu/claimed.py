@@ -211,13 +211,20 @@ def _input_parts(fields: list, room: int) -> list:
         parts = [tuple(np.concatenate([p[k] for p in parts]).astype(np.float32, copy=False) for k in range(5))]
     out = []
     for part in parts:
-        if all(a.dtype == np.float32 and not a.flags.writeable and a.flags.c_contiguous and a.shape[1:] == shape
-               for a, shape in zip(part, _FROZEN_SHAPES)):
+        if _in_place(part):
             out.append(part)
         else:
             out.append(tuple(np.array(a, dtype=np.float32, order="C").reshape((len(a),) + shape)
                              for a, shape in zip(part, _FROZEN_SHAPES)))
     return out
+
+
+def _in_place(part: tuple) -> bool:
+    """Whether a part's arrays can be read in place: read-only, float32, C order, rows as expected."""
+    for a, shape in zip(part, _FROZEN_SHAPES):
+        if a.dtype != np.float32 or a.flags.writeable or not a.flags.c_contiguous or a.shape[1:] != shape:
+            return False
+    return True
 
 
 def _copy_parts(buf: np.ndarray, n0: int, n1: int, parts: list) -> None:
