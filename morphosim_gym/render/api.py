@@ -7,6 +7,8 @@ reconstruction optimises through.
 
 from __future__ import annotations
 
+import sys
+
 from dataclasses import dataclass
 from typing import Any, Optional, Sequence, Union
 
@@ -367,7 +369,7 @@ class PendingRender:
 
     def __del__(self) -> None:
         batch = getattr(self, "_batch", None)
-        if batch is not None:
+        if batch is not None and not sys.is_finalizing():   # at exit the modules' globals are gone, helpers too
             batch.close()                     # a helper waiting for more views returns
 
 
