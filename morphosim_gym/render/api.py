@@ -367,9 +367,9 @@ class PendingRender:
         return self._helpers.first_ready([[w for w in self._where[lo:hi] if isinstance(w, tuple)] for lo, hi in spans],
                                          timeout_s)
 
-    def __del__(self) -> None:
+    def __del__(self, _finalizing: Any = sys.is_finalizing) -> None:   # bound now: at exit the module's globals are gone
         batch = getattr(self, "_batch", None)
-        if batch is not None and not sys.is_finalizing():   # at exit the modules' globals are gone, helpers too
+        if batch is not None and not _finalizing():         # (and the helper threads with them)
             batch.close()                     # a helper waiting for more views returns
 
 
