@@ -46,7 +46,7 @@ _HANDOVER_SPINS = 10_000   # ~50-100 us of looking for a helper to start on a ba
 _HANDOVER_NAPS = 10        # then this many `_POLL_S` sleeps
 _SERVE_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for an open batch's next view before a helper sleeps
 _READY_SPINS = 30_000     # ~0.5 ms of looking (no GIL) for a helper's view to be done before sleeping between looks
-_IDLE_SPINS = (30_000, 400_000)   # ~0.3-4 ms of looking (no GIL) for the next batch before a helper sleeps
+_IDLE_SPINS = (30_000, 400_000)   # ~0.15 / ~2 ms of looking (no GIL) for the next batch before a helper sleeps
 
 _PARTS_PER_VIEW = 4        # source rows a batch sized by capacity keeps per view (a view with more: concatenated)
 
