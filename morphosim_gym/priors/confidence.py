@@ -7,8 +7,9 @@
   differences against the clip's typical jitter; its weight is a Cauchy function of its own
   jitter relative to the clip's (1 for a track as smooth as most, towards 0 for a jumpy one).
 
-Priors that are the generator's own renders (`info["priors"]` "ground_truth") are exact: all
-confidences 1 (`prior_confidences`).
+Tracks that are the generator's own (`info["priors"]` "ground_truth") are exact: confidence 1.
+Exact masks still get the outline weights: an outline pixel mixes two objects' colours in the
+frame, so a hard instance target there fights its colour (`prior_confidences`).
 """
 
 from __future__ import annotations
@@ -59,13 +60,14 @@ def track_confidence(tracks: np.ndarray, visible: np.ndarray, scale: float = 3.0
 
 
 def prior_confidences(clip: GeneratedClip) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """(mask confidence [T, H, W] or None, track confidence [P] or None) of a clip's priors;
-    None where the prior is missing or is the generator's exact render ("ground_truth")."""
+    """(mask confidence [T, H, W] or None, track confidence [P] or None) of a clip's priors; None
+    where the prior is missing, and for tracks that are the generator's exact ones ("ground_truth").
+    Masks, exact or not, weigh their outlines less (see the module docstring)."""
     origin = clip.info.get("priors") or {}
     if not isinstance(origin, dict):
         origin = {}
     masks = None
-    if clip.masks is not None and origin.get("masks") != "ground_truth":
+    if clip.masks is not None:
         masks = mask_confidence(clip.masks)
     tracks = None
     if clip.tracks is not None and origin.get("tracks") != "ground_truth":

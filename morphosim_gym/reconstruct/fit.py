@@ -12,7 +12,7 @@ from tqdm.auto import tqdm
 from ..render import rasterize
 from ..scene import GeneratedClip
 from ..scene.sky import sky_background
-from ..priors import mask_confidence, prior_confidences
+from ..priors import prior_confidences
 from .losses import (arap_loss, depth_loss, empty_alpha_loss, mask_iou_loss, mask_loss, photometric_loss, psnr_torch,
                      scale_shift_depth_loss, smooth_motion_loss, track_loss)
 from .model import DynamicGaussians, rbf_skinning
@@ -41,10 +41,9 @@ class FitConfig:
             "ground_truth"), fitted as before.
         confidence: weigh mask pixels, depth pixels and tracks by the priors' confidences
             (`priors.prior_confidences`: a mask's outline and jumpy tracks count less; exact
-            tracks keep weight 1). The outline of the generator's exact masks counts less too
-            (`priors.mask_confidence`): its pixels mix two objects' colours in the frames, and a
-            hard instance target there fights the colour (ground-truth priors, input view: bus
-            41.6 -> 44.6 dB, mug 43.5 -> 46.0).
+            tracks keep weight 1). The outline of the generator's exact masks counts less too:
+            its pixels mix two objects' colours in the frames, and a hard instance target there
+            fights the colour (ground-truth priors, input view: bus 41.6 -> 44.6 dB, mug 43.5 -> 46.0).
         depth_trim: fraction of each frame's largest relative depth errors left out of the depth term.
         track_delta: Huber threshold (pixels) of the track term (0: L1).
         lr_decay: the position and node-pose learning rates decay exponentially to this fraction
@@ -106,10 +105,6 @@ class ClipTensors:
         self.nears = torch.tensor([c.near for c in clip.cameras], dtype=torch.float64)
         self.fx = float(clip.cameras[0].fx)
         mask_conf, track_conf = prior_confidences(clip) if confidence else (None, None)
-        if confidence and mask_conf is None:
-            # exact masks too: an outline pixel mixes two objects' colours in the frame, and a
-            # hard instance (or depth) target there fights its colour
-            mask_conf = mask_confidence(clip.masks)
         # per-pixel confidence of the mask prior [T, H, W] (None: all 1), per-track confidence [P]
         self.mask_weight = None if mask_conf is None else torch.from_numpy(mask_conf)
         self.track_weight = None if track_conf is None else torch.from_numpy(track_conf)

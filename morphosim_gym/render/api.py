@@ -8,7 +8,6 @@ reconstruction optimises through.
 from __future__ import annotations
 
 import sys
-
 from dataclasses import dataclass
 from typing import Any, Optional, Sequence, Union
 

@@ -30,7 +30,7 @@ AGENT_OBJECT_ID = 100          # instance id the agent's own Gaussians render wi
 POSED_MODEL_FIELDS = ("body_pos", "body_ipos", "body_quat", "geom_pos", "geom_size", "site_pos", "site_size",
                       "cam_pos", "cam_quat", "cam_fovy")
 """The `MjModel` arrays a rig changes after construction (placement, scale, zoom, world cameras)."""
-_SHARED_ATTRS = frozenset({"model", "data", "_skin", "_nominal", "_camera_ids"})   # not part of a rig's episode state
+_SHARED_ATTRS = frozenset({"model", "data", "_skin", "_nominal", "_name_ids"})   # not part of a rig's episode state
 _EYE4 = np.eye(4)
 
 
@@ -98,13 +98,13 @@ class Rig:
             raise ValueError(f"Expected an MJCF file, found no file at {str(path)!r}")
         self.model = mujoco.MjModel.from_xml_path(str(path))
         self.data = mujoco.MjData(self.model)
+        self._name_ids: dict[tuple[str, str], int] = {}    # (kind, name) -> id, looked up once (`_id`)
         self._nominal = {k: getattr(self.model, k).copy()
                          for k in ("body_pos", "body_ipos", "geom_pos", "geom_size", "site_pos", "site_size", "cam_pos")}
         self._root = self._id("body", self.root_body) if self.root_body else 1
         # cameras attached to the world body are posed by the env, not scaled with the rig
         self._world_cams = {i for i in range(self.model.ncam) if int(self.model.cam_bodyid[i]) == 0}
         self.scale = 1.0
-        self._camera_ids: dict[str, int] = {}    # camera name -> id, looked up once (`camera`)
         self._skin_budget = int(skin_budget)
         self._skin = None
         hinges = [j for j in range(self.model.njnt)
@@ -143,6 +143,11 @@ class Rig:
 
     # ------------------------------------------------------------ lookups
     def _id(self, kind: str, name: str) -> int:
+        """The id of a body, site or camera of the model by name (looked up once; `ValueError`
+        naming the model's ones for a name it lacks)."""
+        i = self._name_ids.get((kind, name))
+        if i is not None:
+            return i
         obj = {"body": self._mj.mjtObj.mjOBJ_BODY, "site": self._mj.mjtObj.mjOBJ_SITE,
                "camera": self._mj.mjtObj.mjOBJ_CAMERA}[kind]
         i = self._mj.mj_name2id(self.model, obj, name)
@@ -150,6 +155,7 @@ class Rig:
             count = {"body": self.model.nbody, "site": self.model.nsite, "camera": self.model.ncam}[kind]
             names = [self._mj.mj_id2name(self.model, obj, k) for k in range(count)]
             raise ValueError(f"Expected a {kind} of the rig, found {name!r}; {kind}s: {names}")
+        self._name_ids[(kind, name)] = i
         return i
 
     @property
@@ -224,9 +230,7 @@ class Rig:
 
     def camera(self, name: str, width: int, height: int, near: float | None = None) -> Camera:
         """The named MJCF camera as a `Camera` (after `forward`); `near` defaults to 1% of the rig scale."""
-        i = self._camera_ids.get(name)
-        if i is None:
-            i = self._camera_ids[name] = self._id("camera", name)
+        i = self._id("camera", name)
         if near is None:
             near = 0.01 * self.scale if i not in self._world_cams else 0.01
         return mujoco_camera(self.data.cam_xpos[i], self.data.cam_xmat[i], float(self.model.cam_fovy[i]),

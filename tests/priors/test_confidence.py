@@ -27,13 +27,14 @@ def test_a_jumpy_track_gets_a_low_weight():
     assert w[3] < 0.1 and np.all(np.delete(w, 3) > 0.9)
 
 
-def test_exact_renders_get_no_weights_and_corrupted_ones_do():
+def test_exact_tracks_get_no_weights_exact_masks_outline_weights_and_corrupted_ones_both():
     import morphosim_gym as ms
     from morphosim_gym.priors import corrupt_priors, prepare_priors
 
     sim = ms.MorphoSim(generation=ms.GenerationConfig(width=32, height=32, num_frames=5, detail=0.3))
     clip = sim.generate_clip("The bus is moving from right to left", seed=0)
-    assert prior_confidences(prepare_priors(clip, "ground_truth")) == (None, None)
+    exact_masks, exact_tracks = prior_confidences(prepare_priors(clip, "ground_truth"))
+    assert exact_tracks is None and np.array_equal(exact_masks, mask_confidence(clip.masks))
     bad = prepare_priors(corrupt_priors(clip, 0), "ground_truth")
     assert bad.info["priors"]["masks"] == "corrupted"
     masks, tracks = prior_confidences(bad)

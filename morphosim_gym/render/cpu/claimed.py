@@ -211,7 +211,7 @@ def _input_parts(fields: list, room: int) -> list:
     """A view's non-empty parts as (means, quats, scales, opacities, colors) tuples the kernels
     may read in place: read-only C-order float32 arrays as they are, others copied; more parts
     than `room` source rows left are concatenated into one."""
-    parts = [tuple(f[j] for f in fields) for j in range(len(fields[0])) if len(fields[0][j])]
+    parts = [part for part in zip(*fields) if len(part[0])]
     if len(parts) > max(room, 1):
         parts = [tuple(np.concatenate([p[k] for p in parts]).astype(np.float32, copy=False) for k in range(5))]
     out = []
