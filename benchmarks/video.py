@@ -48,6 +48,10 @@ RUNS = {   # row name -> (video, how it is read); the "test" parts were fixed be
     # second held-out parts, fixed before the next round of tuning (the "test" parts above were seen)
     "bikes_test2": ("bikes", {"part": "test2", "shot": 3}),                 # shot 3, frames 137-186
     "vtest_test2": ("vtest", {"part": "test2", "start": 650}),              # frames 650-746
+    # third held-out parts, fixed before the frame layers of a moving camera were tuned (2026-12-06):
+    # bikes' two shots no part used yet
+    "bikes_test3": ("bikes", {"part": "test3", "shot": 1}),                 # shot 1, frames 30-75, pan ~7 deg
+    "bikes_test4": ("bikes", {"part": "test3", "shot": 0}),                 # shot 0, frames 0-29, pan ~47 deg
 }
 
 
