@@ -12,7 +12,9 @@ only. A held-out frame is rendered at its time between its neighbours (the train
 keyframes 0, 1, 2... of the fitted clip; a held-out frame sits halfway between the two around it)
 from the camera interpolated between theirs (rotation slerp). Two references next to it: the
 same score for the training frames (input view), and "hold" (the previous training frame shown
-in place of the held-out one: what a model that knows nothing in between would score).
+in place of the held-out one: what a model that knows nothing in between would score) and
+"turned" (that frame re-drawn by the estimated camera turn to the held-out frame's camera: holding
+it with the camera's motion undone, an image warp; the same as hold for a still camera).
 Nothing from the held-out frames is used by the fit or the cameras. `regions_db` splits the
 held-out error into the static background and the changed pixels (those that differ from a
 neighbouring training frame: the movers), for the render and for "hold". Rows: each video's dev
@@ -111,11 +113,24 @@ def _db(mse: float) -> float:
     return float(10 * np.log10(255.0 ** 2 / max(mse, 1e-9)))
 
 
+def turned(frame: np.ndarray, src: Any, dst: Any) -> np.ndarray:
+    """`frame` seen from camera `src` re-drawn for camera `dst` by the rotation between them (a
+    homography: both stand at the same place, the cameras of a video turn about their centre), edge
+    pixels repeated where `src` saw nothing: holding the previous frame with the camera's turn undone."""
+    import cv2
+
+    half = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.5], [0.0, 0.0, 1.0]])       # pixel centres at +0.5
+    h = src.K @ dst.world_to_camera[:3, :3] @ src.world_to_camera[:3, :3].T @ np.linalg.inv(src.K)
+    out = cv2.warpPerspective(frame.astype(np.float32), np.linalg.inv(half) @ h @ half, (frame.shape[1], frame.shape[0]),
+                              flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return np.clip(out + 0.5, 0, 255).astype(np.uint8)
+
+
 def score(clip: Any, train_clip: Any, scene: Any, train: list[int], held: list[int]) -> dict[str, Any]:
     from morphosim_gym.scene.camera_motion import slerp_cameras
 
     keys = np.arange(len(train), dtype=np.float64)
-    held_psnr, hold_psnr, renders = [], [], {}
+    held_psnr, hold_psnr, turned_psnr, renders = [], [], [], {}
     regions = {"render_static": [], "render_changed": [], "hold_static": [], "hold_changed": [], "changed_share": []}
     for o in held:
         k = float(np.interp(o, train, keys))
@@ -125,6 +140,7 @@ def score(clip: Any, train_clip: Any, scene: Any, train: list[int], held: list[i
         held_psnr.append(psnr(img, clip.frames[o]))
         prev = max(i for i in train if i < o)
         hold_psnr.append(psnr(clip.frames[prev], clip.frames[o]))
+        turned_psnr.append(psnr(turned(clip.frames[prev], train_clip.cameras[train.index(prev)], cam), clip.frames[o]))
         ch = changed_region(clip.frames, o, prev, min(i for i in train if i > o))
         regions["changed_share"].append(float(ch.mean()))
         for name, img_o in (("render", img), ("hold", clip.frames[prev])):
@@ -133,7 +149,8 @@ def score(clip: Any, train_clip: Any, scene: Any, train: list[int], held: list[i
     input_psnr = [psnr(render_at(scene, train_clip.cameras[j], j / train_clip.fps), train_clip.frames[j])
                   for j in range(0, len(train), 3)]
     return {"held_out_psnr": float(np.mean(held_psnr)), "held_out_psnr_per_frame": [round(v, 2) for v in held_psnr],
-            "hold_previous_psnr": float(np.mean(hold_psnr)), "input_psnr": float(np.mean(input_psnr)),
+            "hold_previous_psnr": float(np.mean(hold_psnr)), "turned_previous_psnr": float(np.mean(turned_psnr)),
+            "input_psnr": float(np.mean(input_psnr)),
             # PSNR of the mean squared error over the held-out frames' static / changed pixels
             "regions_db": {k: round(float(np.mean(v)), 3) if k == "changed_share" else round(_db(float(np.mean(v))), 2)
                            for k, v in regions.items()},
@@ -210,12 +227,13 @@ def run_video(name: str, path: Path, out: Path, cache_dir: str | None, budget: d
 
 def table(rows: list[dict[str, Any]]) -> str:
     head = (f"{'video':20s} {'part':>5s} {'frames':>6s} {'size':>8s} {'camera':>6s} {'held-out dB':>11s} {'hold-prev dB':>12s} "
-            f"{'input dB':>8s} {'fit s':>6s} {'iters':>6s}  edits")
+            f"{'turned-prev dB':>14s} {'input dB':>8s} {'fit s':>6s} {'iters':>6s}  edits")
     lines = [head]
     for r in rows:
         ok = ", ".join(f"{k.split(' ')[0]} {'ok' if v['ok'] else 'FAIL'}" for k, v in r["edits"].items())
         lines.append(f"{r['video']:20s} {r.get('part', 'dev'):>5s} {r['frames']:6d} {r['size'][0]:>4d}x{r['size'][1]:<3d} {r['camera']:>6s} "
-                     f"{r['held_out_psnr']:11.2f} {r['hold_previous_psnr']:12.2f} {r['input_psnr']:8.2f} "
+                     f"{r['held_out_psnr']:11.2f} {r['hold_previous_psnr']:12.2f} {r.get('turned_previous_psnr', float('nan')):14.2f} "
+                     f"{r['input_psnr']:8.2f} "
                      f"{r['fit_s']:6.0f} {str(r.get('iterations', '')).split(' ')[0]:>6s}  {ok}")
     return "\n".join(lines)
 

@@ -1,5 +1,5 @@
-"""Moving things of a real video as per-frame layers that move between the fitted frames, and a
-clean background plate for a still camera.
+"""Moving things of a real video as per-frame layers that move between the fitted frames, a clean
+background plate for a still camera, and whole-frame layers for a moving one.
 
 The scaffold fit (`reconstruct`) moves each instance with a handful of rigid nodes; a video's
 estimated masks make every moving region one instance (a crowd of walkers is one "person"), so
@@ -20,7 +20,15 @@ between score below simply showing the previous frame. `motion_layers` adds to a
   fit's own mover Gaussians dropped and so are its static Gaussians that the input view sorts in
   front of the plate anywhere within their extent (floaters that only blur the plate's pixels);
   the layers then keep only their pixels that differ from the plate (the mover, not the background
-  its mask also covers); a moving camera has no plate and keeps the fit's movers behind the layers;
+  its mask also covers);
+* for a moving camera (no plate: the view changes), frame layers: every pixel of each fitted frame
+  k lifted at its depth prior (a little in front of the fit) on nodes of its own, shown at 2k and at
+  the half step 2k + 1 after it, hidden otherwise. Rendered from the camera between frames k and
+  k + 1, the layer is frame k turned by the camera's motion: the static scene where it was, where
+  the scaffold fit of a real street draws it blurred. The fit's movers and its static Gaussians that
+  a frame sorts in front of its layer are dropped, as for the plate (the fit keeps what no frame
+  saw, for novel views); the movers' layers are left out (`LayerConfig.frame_movers`): the frame
+  layers show the movers as the earlier frame had them;
 * colours refined against the frames through the renderer (its blur undone, `refine_rounds`).
 
 The result is a `Scene4D` with `2T - 1` motion frames at twice the clip's frame rate (times in
@@ -61,19 +69,28 @@ class LayerConfig:
         refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
         search: how far a region's motion is searched for between fitted frames, as a fraction of the
             width, around its half-resolution match (`coarse_to_fine`) or around staying still.
+        frames: whole-frame layers (module docstring); None: for a moving camera (not a still one,
+            which has the plate).
+        frame_offset: the frame layers sit this fraction of their depth in front of the fitted scene.
+        frame_movers: with frame layers, also add the movers' layers in front of them. Off by
+            default: on bikes.mp4's dev part they lowered held-out PSNR (27.84 -> 27.29 dB; the
+            estimated masks there take passing vans whole and miss the cyclist, and a region moved
+            half-way by one flow ghosts), where the frame layers alone show the movers as the
+            earlier frame had them.
         coarse_to_fine: also search around each region's motion matched at half resolution within
             twice the range (`coarse_guesses`), so fast movers are followed. Off by default: on the
             dev parts (96 px) it lowered held-out PSNR (bikes 24.64 -> 24.51, vtest 28.31 -> 27.66):
             the wider search finds more false matches of flat regions than fast movers.
         keep_still: a region moves only when its best match beats staying in place by this factor.
-        keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: for a
-            moving camera, which has no plate to show behind them; a still camera drops them).
+        keep_movers: keep the fit's own Gaussians of the movers behind the layers (None: only for a
+            moving camera without frame layers, which has nothing else to show behind them).
         refine_step: fraction of the residual each round adds (below 1 damps overshoot at edges).
         plate_level: with a plate, a layer keeps only the pixels of its frame that differ from the
             plate by more than this (0-255, any channel): the mover itself, not the background its
             mask also covers (which the plate shows, and which would otherwise move along).
-        drop_occluders: with a plate, drop the fitted Gaussians of the static objects that the input
-            view sorts in front of it (they can only cover its per-pixel colours there).
+        drop_occluders: with a plate (frame layers), drop the fitted Gaussians of the static objects
+            that the input view (a fitted frame's view) sorts in front of it (they can only cover
+            its per-pixel colours there).
     """
 
     min_area: int = 4
@@ -90,6 +107,9 @@ class LayerConfig:
     plate_level: float = 12.0
     drop_occluders: bool = True
     coarse_to_fine: bool = False
+    frames: bool | None = None
+    frame_offset: float = 0.05
+    frame_movers: bool = False
 
 
 @dataclass(frozen=True)
@@ -247,6 +267,50 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
     return out
 
 
+def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerConfig) -> dict[str, np.ndarray]:
+    """Every pixel of each fitted frame k at its depth prior (pixels of unknown depth take their
+    nearest known pixel's), one node per frame and object, shown at motion frames 2k and 2k + 1;
+    "depth" holds each frame's layer depth [T, H, W] (0 where the frame has no layer)."""
+    t, h, w = priors.depth.shape
+    cams = clip.cameras
+    parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
+    trans: list[np.ndarray] = []
+    layer_depth = np.zeros((t, h, w))
+    for k in range(t):
+        depth = _fill_nearest(priors.depth[k], np.ones((h, w), bool))
+        if not (depth > 0).all():
+            continue                                     # no depth anywhere in this frame
+        layer_depth[k] = depth * (1.0 - cfg.frame_offset)
+        ids = np.where(priors.masks[k] >= 0, priors.masks[k], setting)
+        path = np.repeat((-cams[k].forward * HIDE_DISTANCE)[None], 2 * t - 1, axis=0)
+        path[2 * k:2 * k + 2] = 0.0                        # shown at its frame and the half step after
+        for obj in np.unique(ids):
+            rows, cols = np.nonzero(ids == obj)
+            pts, fp = _lift(cams[k], rows, cols, layer_depth[k, rows, cols])
+            parts["node"].append(np.full(len(rows), len(trans)))
+            trans.append(path)
+            parts["means"].append(pts)
+            parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
+            parts["footprint"].append(fp)
+            parts["ids"].append(np.full(len(rows), obj))
+            parts["pixel"].append(np.stack([np.full(len(rows), k), rows, cols], axis=1))
+    if not trans:
+        return {}
+    out = {k: np.concatenate(v) for k, v in parts.items()}
+    out["trans"], out["depth"] = np.stack(trans, axis=1), layer_depth
+    return out
+
+
+def _merge_layers(first: dict[str, np.ndarray], second: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Two layer sets as one (the second's nodes numbered after the first's)."""
+    if not first or not second:
+        return first or second
+    out = {k: np.concatenate([first[k], second[k] + (first["trans"].shape[1] if k == "node" else 0)])
+           for k in ("means", "colors", "footprint", "ids", "node", "pixel")}
+    out["trans"] = np.concatenate([first["trans"], second["trans"]], axis=1)
+    return out
+
+
 def _plate(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerConfig) -> dict[str, np.ndarray]:
     """Median background of a still camera over the pixels no mover covers, a little in front of the fit."""
     moving = np.isin(priors.masks, priors.movers)
@@ -400,14 +464,16 @@ def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice]
                     targets: dict[str, np.ndarray], rounds: int, step_size: float = 1.0) -> Scene4D:
     """Undo the renderer's blur on the plate and layer colours: each round adds every Gaussian's
     pixel residual (its frame minus the render there) to its colour (Van Cittert iteration)."""
+    shown = np.unique(np.concatenate([px[:, 0] for px in pixels.values()] or [np.zeros(0, int)]))
     for _ in range(rounds):
         colors = np.array(scene.gaussians.colors, np.float64)
-        for name, sl in spans.items():
-            px = pixels[name]
-            for k in np.unique(px[:, 0]):
+        for k in shown:                                   # each fitted frame rendered once a round
+            img = _render(scene, clip.cameras[int(k)], float(k) / clip.fps)
+            for name, sl in spans.items():
+                px = pixels[name]
                 sel = np.flatnonzero(px[:, 0] == k)
-                cam = clip.cameras[int(k)]
-                img = _render(scene, cam, float(k) / clip.fps)
+                if not len(sel):
+                    continue
                 target = targets[name] if name == "plate" else clip.frames[int(k)] / 255.0
                 rows, cols = px[sel, 1], px[sel, 2]
                 step = target[rows, cols] - img[rows, cols]
@@ -446,8 +512,9 @@ def _append(parts: list[Gaussians], spans: dict[str, slice], pixels: dict[str, n
 def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | None = None,
                   config: LayerConfig | None = None) -> Scene4D:
     """`scene` (fitted to `clip`) with per-frame layers of its movers, moved between the fitted
-    frames, and for a still camera a median background plate in place of the fit's movers (see the
-    module docstring). A scene without movers, or a clip of one frame, gets only the plate."""
+    frames, for a still camera a median background plate in place of the fit's movers, for a moving
+    one whole-frame layers (see the module docstring). A still scene without movers gets only the
+    plate; a clip of one frame gets neither."""
     cfg = config or LayerConfig()
     if scene.motion.num_frames not in (1, clip.num_frames):
         raise ValueError(f"Expected a scene fitted to the clip ({clip.num_frames} frames), found "
@@ -456,29 +523,35 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     g = scene.gaussians
     all_ids = np.array(sorted({o.id for o in scene.objects}), np.int64)
     table = _feature_table(scene, all_ids)
-    keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not _still(clip)
-    keep = np.ones(len(g), bool) if keep_movers else ~np.isin(np.asarray(g.object_ids), pri.movers)
+    still = _still(clip)
     spans: dict[str, slice] = {}
     pixels: dict[str, np.ndarray] = {}
     targets: dict[str, np.ndarray] = {}
     setting = [o.id for o in scene.objects if o.role == "background"]
-    plate = None
-    if cfg.plate and _still(clip) and setting and clip.num_frames > 1:
-        plate = _plate(clip, pri, setting[0], cfg)
-        if cfg.drop_occluders:                    # the movers kept by choice (keep_movers) stay
-            keep &= ~(_in_front_of_plate(g, clip.cameras[0], plate["depth"]) &
-                      ~np.isin(np.asarray(g.object_ids), pri.movers))
+    several = clip.num_frames > 1
+    plate = _plate(clip, pri, setting[0], cfg) if cfg.plate and still and setting and several else None
+    want_frames = cfg.frames if cfg.frames is not None else not still
+    frames = _frame_layers(clip, pri, setting[0], cfg) if want_frames and setting and several else {}
+    keep_movers = cfg.keep_movers if cfg.keep_movers is not None else not (still or frames)
+    static = ~np.isin(np.asarray(g.object_ids), pri.movers)
+    keep = np.ones(len(g), bool) if keep_movers else static.copy()
+    if cfg.drop_occluders:                        # the movers kept by choice (keep_movers) stay
+        views = [(clip.cameras[0], plate["depth"])] if plate is not None else []
+        views += [(clip.cameras[k], d) for k, d in enumerate(frames.get("depth", ())) if d.any()]
+        for camera, depth in views:
+            keep &= ~(_in_front_of_plate(g, camera, depth) & static)
     parts = [g.subset(keep)]
     if plate is not None:
         _append(parts, spans, pixels, "plate", plate, cfg, table)
         targets["plate"] = plate["image"]
         targets["plate_free"] = (~np.isin(pri.masks[0], pri.movers)).astype(np.float64)
-    layers = (_layers(clip, pri, cfg, None if plate is None else plate["image"])
-              if pri.movers and clip.num_frames > 1 else {})
-    if layers:
-        layers["ids"] = np.where(np.isin(layers["ids"], all_ids), layers["ids"], pri.movers[0])
-        _append(parts, spans, pixels, "layers", layers, cfg, table)
-    out = _assemble(scene, clip, parts, keep, layers, pri.movers)
+    movers = (_layers(clip, pri, cfg, None if plate is None else plate["image"])
+              if pri.movers and several and (cfg.frame_movers or not frames) else {})
+    for name, part, fallback in (("frames", frames, setting[:1]), ("layers", movers, pri.movers[:1])):
+        if part:                                  # (in the order _merge_layers keeps)
+            part["ids"] = np.where(np.isin(part["ids"], all_ids), part["ids"], fallback[0])
+            _append(parts, spans, pixels, name, part, cfg, table)
+    out = _assemble(scene, clip, parts, keep, _merge_layers(frames, movers), pri.movers)
     if not cfg.refine_rounds:
         return out
     return _refine_colours(out, clip, spans, pixels, targets, cfg.refine_rounds, cfg.refine_step)

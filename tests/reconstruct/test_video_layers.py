@@ -1,4 +1,5 @@
-"""Motion layers of a still-camera video: per-frame layers moved along the flow, a median plate."""
+"""Motion layers of a video: per-frame layers moved along the flow, a median plate for a still
+camera, whole-frame layers for a moving one."""
 
 from __future__ import annotations
 
@@ -119,7 +120,7 @@ def test_kept_fitted_movers_keep_their_motion_on_the_half_step_timeline():
 
 
 def test_without_movers_a_moving_camera_scene_keeps_its_fitted_timeline():
-    """No mover found (no layers) in a panning clip: the fitted motion and cameras stay as they are
+    """No mover found and no frame layers in a panning clip: the fitted motion and cameras stay as they are
     (the half-step timeline is only for layers; it froze the fit at its first frame and, with one
     camera per frame, failed with "Expected 1 or 1 Cameras, found 7")."""
     clip, pri = _clip()
@@ -130,7 +131,8 @@ def test_without_movers_a_moving_camera_scene_keeps_its_fitted_timeline():
     trans[:, 0, 0] = np.arange(T) * 0.2                      # the fitted person node walks along x
     motion = Motion(rot, trans, np.array([[-1], [0]]), np.array([[0.0], [1.0]]), np.array([1]))
     fitted = Scene4D(_fitted(clip).gaussians, motion, _fitted(clip).objects, clip.fps, cams)
-    scene = motion_layers(fitted, clip, priors=LayerPriors(pri.masks * 0 - 1, pri.depth, ()))
+    scene = motion_layers(fitted, clip, priors=LayerPriors(pri.masks * 0 - 1, pri.depth, ()),
+                          config=LayerConfig(frames=False))
     assert len(scene.gaussians) == len(fitted.gaussians) and scene.fps == fitted.fps
     assert scene.cameras == fitted.cameras
     np.testing.assert_allclose(scene.motion.translations[:, 0, 0], np.arange(T) * 0.2)
@@ -280,3 +282,69 @@ def test_a_fast_mover_is_found_beyond_the_fixed_window_from_its_coarse_match():
     assert np.abs(region_flows(frames, 0, 1, labels, 1, search=8)[0][0] - 14) > 5
     with pytest.raises(ValueError, match="guess"):
         region_flows(frames, 0, 1, labels, 1, guess=np.zeros((2, 2)))
+
+
+PAN = 3.0          # degrees the camera turns a frame in the panning clip
+
+
+def _panorama(camera) -> np.ndarray:
+    """[H, W, 3] in [0, 1]: smooth colour waves (~13 px) over the viewing directions, far away."""
+    rows, cols = np.mgrid[:camera.height, :camera.width]
+    d = camera.unproject(np.stack([cols + 0.5, rows + 0.5], -1), np.ones((camera.height, camera.width))) - camera.position
+    azimuth, elevation = np.arctan2(d[..., 0], d[..., 1]), np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1]))
+    phase = np.array([0.0, 2.0, 4.0])
+    return 0.5 + 0.2 * np.sin(25.0 * azimuth[..., None] + phase) + 0.2 * np.cos(20.0 * elevation[..., None] - phase)
+
+
+def _pan_clip() -> tuple[GeneratedClip, LayerPriors]:
+    """A camera turning PAN degrees a frame in front of a far, smooth panorama (every frame exact),
+    and its priors (all "road", depth 6 m)."""
+    from morphosim_gym.scene import Camera
+
+    base = Camera.look_at((0.0, 0.0, 1.0), (0.0, 1.0, 1.0), width=W, height=H, fov_y_deg=50.0)
+    cams = tuple(base.orbit(PAN * i, base.position) for i in range(T))
+    frames = np.stack([(_panorama(c) * 255 + 0.5).astype(np.uint8) for c in cams])
+    clip = GeneratedClip(frames, cams, 5.0, prompt="a person walks on a road")
+    return clip, LayerPriors(np.zeros((T, H, W), np.int32), np.full((T, H, W), 6.0, np.float32), ())
+
+
+def test_a_moving_camera_shows_each_frame_turned_by_the_camera_between_fitted_frames():
+    """Frame layers: a fitted frame's view draws its frame; the view half-way between two fitted
+    frames draws the earlier one turned by the camera, much closer to the truth there than the
+    earlier frame as it is (what holding it would show). Without them the stub fit shows nothing.
+    (What the turn brings into view at the edge only the fit can show: left out.)"""
+    from morphosim_gym.scene.camera_motion import slerp_cameras
+
+    clip, pri = _pan_clip()
+    scene = motion_layers(_fitted(clip), clip, priors=pri)
+    bare = motion_layers(_fitted(clip), clip, priors=pri, config=LayerConfig(frames=False))
+    assert scene.motion.num_frames == 2 * T - 1 and len(scene.cameras) == 2 * T - 1
+    for k in range(T):
+        assert np.abs(_rgb_at(scene, clip.cameras[k], k / clip.fps) - clip.frames[k] / 255.0).mean() < 0.01
+    inner = np.s_[:, 4:-4]                   # the columns a half step's turn (1.4 px) keeps in view
+    for k in range(T - 1):
+        cam = slerp_cameras(clip.cameras, list(range(T)), k + 0.5)
+        want = _panorama(cam)[inner]
+        layer = np.abs(_rgb_at(scene, cam, (k + 0.5) / clip.fps)[inner] - want).mean()
+        hold = np.abs(clip.frames[k][inner] / 255.0 - want).mean()
+        assert layer < 0.5 * hold, (k, layer, hold)
+        assert np.abs(_rgb_at(bare, cam, (k + 0.5) / clip.fps)[inner] - want).mean() > 2 * hold
+
+
+def test_frame_layers_drop_the_fits_movers_and_what_a_frame_sorts_in_front_of_its_layer():
+    clip, pri = _pan_clip()
+    g = Gaussians(means=np.array([[0.0, 3.0, 1.0], [0.0, 9.0, 1.0], [0.0, 9.0, 1.2]]),
+                  quats=np.tile([1.0, 0, 0, 0], (3, 1)), scales=np.full((3, 3), 0.05), opacities=np.ones(3),
+                  colors=np.full((3, 3), 0.5), object_ids=[0, 0, 1])      # road in front, road behind, person
+    objects = (SceneObject(0, "road", "road", role="background"), SceneObject(1, "person", "person"))
+    fitted = Scene4D(g, Motion.static(3, T), objects, clip.fps, clip.cameras)
+    pri = LayerPriors(pri.masks, pri.depth, (1,))
+    kept = {len(motion_layers(fitted, clip, priors=pri, config=LayerConfig(drop_occluders=d, refine_rounds=0,
+                                                                               keep_movers=m)).gaussians)
+            for d, m in ((True, None), (False, None), (False, True))}
+    layer_count = T * H * W
+    assert kept == {layer_count + 1, layer_count + 2, layer_count + 3}
+
+
+def _rgb_at(scene: Scene4D, camera, t: float) -> np.ndarray:
+    return np.clip(np.asarray(render(scene, camera, t=t).rgb), 0, 1)
