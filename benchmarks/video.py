@@ -54,6 +54,8 @@ RUNS = {   # row name -> (video, how it is read); the "test" parts were fixed be
     # bikes' two shots no part used yet
     "bikes_test3": ("bikes", {"part": "test3", "shot": 1}),                 # shot 1, frames 30-75, pan ~7 deg
     "bikes_test4": ("bikes", {"part": "test3", "shot": 0}),                 # shot 0, frames 0-29, pan ~47 deg
+    # and vtest's, fixed before the still camera's half-step layers were tuned (2026-12-06)
+    "vtest_test3": ("vtest", {"part": "test3", "start": 200}),              # frames 200-296
 }
 
 
