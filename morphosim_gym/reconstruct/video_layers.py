@@ -10,10 +10,10 @@ between score below simply showing the previous frame. `motion_layers` adds to a
 * one layer per fitted frame k and connected moving region: the region's pixels lifted at the
   depth prior (a little nearer the camera) as pixel-sized Gaussians, bound to a node of their own;
 * the node's poses on a timeline of half steps (motion frame 2k is fitted frame k): identity at
-  2k, half the region's image motion towards frame k +- 1 (masked template matching,
-  `region_flows`) at 2k +- 1, and far behind the camera otherwise (hidden). So a fitted frame
-  shows its own layer, and the time half-way between two fitted frames shows both neighbours'
-  layers moved towards each other;
+  2k, half the region's image motion towards frame k - 1 (masked template matching,
+  `region_flows`) at 2k - 1, and far behind the camera otherwise (hidden). So a fitted frame
+  shows its own layer, and the time half-way between two fitted frames shows the later one's
+  layers moved half-way back (`LayerConfig.between`: or the earlier one's moved on, or both);
 * for a still camera, a background plate: the per-pixel median of the frames over the pixels no
   moving region covers (a pixel covered in every frame takes its nearest neighbour's depth), in
   front of the fitted background (which keeps what the view never saw, from completion), with the
@@ -52,6 +52,7 @@ from .object_features import object_prototypes
 __all__ = ["LayerConfig", "LayerPriors", "coarse_guesses", "layer_priors", "motion_layers", "region_flows"]
 
 HIDE_DISTANCE = 1e4      # metres behind the camera a layer waits while it is not shown
+BETWEEN = {"next": (-1,), "previous": (1,), "both": (-1, 1)}   # LayerConfig.between -> the half steps a layer shows at
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,12 @@ class LayerConfig:
         refine_rounds: colour refinement rounds against the frames (0: the pixels' colours as they are).
         search: how far a region's motion is searched for between fitted frames, as a fraction of the
             width, around its half-resolution match (`coarse_to_fine`) or around staying still.
+        between: which fitted frame's layers a time half-way between two fitted frames shows,
+            moved half-way: "next" (the later frame's, moved back), "previous" (the earlier
+            frame's, moved on) or "both". Both neighbours' half-moved silhouettes overlap into a
+            fatter one that covers the background around the mover: on vtest.avi's dev part
+            held-out PSNR both 27.94, previous 28.13, next 28.42 dB (static pixels 34.3 / 35.4 /
+            36.1 dB).
         frames: whole-frame layers (module docstring); None: for a moving camera (not a still one,
             which has the plate).
         frame_offset: the frame layers sit this fraction of their depth in front of the fitted scene.
@@ -107,6 +114,7 @@ class LayerConfig:
     plate_level: float = 12.0
     drop_occluders: bool = True
     coarse_to_fine: bool = False
+    between: str = "next"
     frames: bool | None = None
     frame_offset: float = 0.05
     frame_movers: bool = False
@@ -241,7 +249,7 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
         flows = {d: region_flows(clip.frames, k, k + d, labels, count - 1, reach, cfg.keep_still,
                                  coarse_guesses(clip.frames, k, k + d, labels, count - 1, reach, cfg.keep_still)
                                  if cfg.coarse_to_fine else None)
-                 for d in (-1, 1) if 0 <= k + d < t}
+                 for d in BETWEEN[cfg.between] if 0 <= k + d < t}
         hide = -cams[k].forward * HIDE_DISTANCE
         for r in keep:
             rows, cols = np.nonzero(labels == r)
@@ -516,6 +524,8 @@ def motion_layers(scene: Scene4D, clip: GeneratedClip, priors: LayerPriors | Non
     one whole-frame layers (see the module docstring). A still scene without movers gets only the
     plate; a clip of one frame gets neither."""
     cfg = config or LayerConfig()
+    if cfg.between not in BETWEEN:
+        raise ValueError(f"Expected LayerConfig.between in {sorted(BETWEEN)}, found {cfg.between!r}")
     if scene.motion.num_frames not in (1, clip.num_frames):
         raise ValueError(f"Expected a scene fitted to the clip ({clip.num_frames} frames), found "
                          f"{scene.motion.num_frames} motion frames")

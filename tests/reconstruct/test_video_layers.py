@@ -72,6 +72,31 @@ def test_a_time_between_fitted_frames_shows_the_mover_half_way_and_once():
         assert np.abs(at - clip.frames[k] / 255.0)[seen].mean() < 0.03
 
 
+@pytest.mark.parametrize("between, shows", [("next", (-1,)), ("previous", (1,)), ("both", (-1, 1))])
+def test_a_half_step_shows_the_layers_of_the_neighbour_asked_for(between, shows):
+    """Frame k's layer is drawn at 2k and, moved half-way, at the half steps `between` names; hidden
+    at the others (the default shows one silhouette, the later frame's, not two overlapping)."""
+    clip, pri = _clip()
+    scene = motion_layers(_fitted(clip), clip, priors=pri, config=LayerConfig(between=between))
+    trans = scene.motion.translations
+    k0 = trans.shape[1] - T                                   # one layer node per frame, after the fit's
+    for k in range(1, T - 1):
+        near = np.linalg.norm(trans[:, k0 + k], axis=-1) < 1.0
+        assert set(np.flatnonzero(near) - 2 * k) == {0, *shows}
+        assert np.linalg.norm(trans[2 * k + shows[0], k0 + k]) == pytest.approx(
+            np.linalg.norm(_clip_step_world(clip)) / 2, rel=0.2)
+    with pytest.raises(ValueError, match="between"):
+        motion_layers(_fitted(clip), clip, priors=pri, config=LayerConfig(between="middle"))
+
+
+def _clip_step_world(clip: GeneratedClip) -> np.ndarray:
+    """World displacement of the square's centre over one frame (STEP px at its row's ground depth)."""
+    cam = clip.cameras[0]
+    depth = float(ground_plane_depth(cam)[ROW + SIDE // 2, 8 + SIDE // 2])
+    a = cam.unproject(np.array([8 + SIDE / 2, ROW + SIDE / 2]), np.float64(depth))
+    return cam.unproject(np.array([8 + STEP + SIDE / 2, ROW + SIDE / 2]), np.float64(depth)) - a
+
+
 def test_a_still_camera_gets_the_background_behind_the_movers_from_the_other_frames():
     clip, pri = _clip()
     scene = motion_layers(_fitted(clip), clip, priors=pri)
