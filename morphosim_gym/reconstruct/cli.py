@@ -29,6 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                       "its first noun labels the moving regions")
     video.add_argument("--max-frames", type=int, default=49, help="frame budget (every k-th frame beyond it; 49)")
     video.add_argument("--size", type=int, default=160, help="longer side of the frames in pixels (160)")
+    video.add_argument("--layers", choices=("auto", "movers", "none"), default="auto",
+                       help="what is drawn over the fit: auto (a panning video's frames as layers, a still "
+                            "one's movers over a background plate), movers (no frame layers: a smaller, "
+                            "faster scene for a pan), none (the fit alone)")
     video.add_argument("--camera", choices=CAMERA_MODES, default="auto",
                        help="auto: estimate a pan from the frames, still if it stays under 0.5 deg")
     p.add_argument("--report", action="store_true", help="print PSNR/SSIM on input and novel views, IoU, time")
@@ -89,7 +93,7 @@ def _reconstruct_video(args: argparse.Namespace) -> int:
     src = Path(args.clip)
     out = Path(args.out) if args.out else src.with_name(f"{src.stem or src.name}_scene")
     result = reconstruct_video(src, out, fov_deg=args.fov, prompt=args.prompt, max_frames=args.max_frames,
-                               size=args.size, camera=args.camera, config=_config(args))
+                               size=args.size, camera=args.camera, config=_config(args), layers=args.layers)
     clip, scene = result.clip, result.scene
     cam = clip.info["camera"]
     objects = ", ".join(f"{o.name}{' (moving)' if o.dynamic else ''}" for o in scene.objects)

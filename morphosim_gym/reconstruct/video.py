@@ -23,7 +23,7 @@ from ..scene import GeneratedClip, Scene4D, save_scene
 from .pipeline import ReconstructionConfig, reconstruct
 from .video_layers import LayerConfig, motion_layers
 
-__all__ = ["VideoResult", "fit_video", "preview_strip", "reconstruct_video"]
+__all__ = ["LAYER_CHOICES", "VideoResult", "fit_video", "preview_strip", "reconstruct_video"]
 
 SCENE_NAME, PREVIEW_NAME, INFO_NAME = "scene.msim", "preview.png", "info.json"
 
@@ -74,15 +74,25 @@ def _summary(clip: GeneratedClip, scene: Scene4D, seconds: float) -> dict[str, A
             "frames": clip.num_frames, "size": [clip.width, clip.height], "fps": clip.fps,
             "objects": [{"id": o.id, "name": o.name, "category": o.category, "dynamic": o.dynamic, "role": o.role}
                         for o in scene.objects],
-            "gaussians": len(scene.gaussians), "seconds": round(seconds, 2),
+            "gaussians": len(scene.gaussians), "motion_frames": scene.motion.num_frames, "seconds": round(seconds, 2),
             "priors": getattr(scene, "_fit_log", {}).get("priors")}
+
+
+LAYER_CHOICES = {"auto": LayerConfig(), "movers": LayerConfig(frames=False), "none": None}
 
 
 def reconstruct_video(path: str | Path, out_dir: str | Path, fov_deg: float = 50.0, prompt: str | None = None,
                       max_frames: int = 49, size: int = 160, camera: str = "auto",
-                      config: ReconstructionConfig | None = None, **video: Any) -> VideoResult:
+                      config: ReconstructionConfig | None = None, layers: str = "auto", **video: Any) -> VideoResult:
     """Read `path`, fit, write the scene, the preview and the summary into `out_dir` (created).
-    Extra keyword arguments go to `GeneratedClip.from_video` (fps, camera_height, pitch_deg, shot)."""
+
+    `layers` (`LAYER_CHOICES`): "auto" (`LayerConfig()`: a moving camera's frames as layers, a still
+    one's movers over a plate), "movers" (no frame layers: a panning video's scene ~2.5x smaller and
+    its env steps ~3x faster, its held-out frames ~2 dB worse on bikes.mp4) or "none" (the scaffold
+    fit alone). Extra keyword arguments go to `GeneratedClip.from_video` (fps, camera_height,
+    pitch_deg, shot)."""
+    if layers not in LAYER_CHOICES:
+        raise ValueError(f"Expected layers in {sorted(LAYER_CHOICES)}, found {layers!r}")
     import imageio.v3 as iio
 
     out = Path(out_dir)
@@ -95,7 +105,7 @@ def reconstruct_video(path: str | Path, out_dir: str | Path, fov_deg: float = 50
         raise ValueError("Expected priors 'auto' or 'estimated' for a video (it carries no ground truth), "
                          "found 'ground_truth'")
     start = time.perf_counter()
-    scene = fit_video(clip, cfg)
+    scene = fit_video(clip, cfg, layers=LAYER_CHOICES[layers])
     seconds = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     scene_path, preview_path, info_path = out / SCENE_NAME, out / PREVIEW_NAME, out / INFO_NAME

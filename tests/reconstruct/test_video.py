@@ -98,6 +98,24 @@ def test_a_video_becomes_a_scene_for_the_viewer_and_the_envs(video, tmp_path, ca
     # edits on fitted videos are measured by benchmarks/video.py: a 60-iteration fit is too short to select reliably
 
 
+def test_the_layers_drawn_over_the_fit_are_chosen_on_the_command_line(video, tmp_path, capsys):
+    """`--layers none` keeps the scaffold fit alone (its timeline: one motion frame per video frame;
+    the default's layers put it on half steps, 2T - 1); an unknown choice fails before anything is written."""
+    from morphosim_gym.reconstruct.video import reconstruct_video
+
+    out = tmp_path / "walk"
+    args = ["reconstruct", str(video), "--prompt", "a person walks on the grass", "--iterations", "30",
+            "--feature-iterations", "10", "--no-cache"]
+    frames = {}
+    for layers in ("none", "auto"):
+        assert main([*args, "--out", str(out / layers), "--layers", layers]) == 0, capsys.readouterr().err
+        frames[layers] = json.loads((out / layers / "info.json").read_text())["motion_frames"]
+    assert frames == {"none": 8, "auto": 15}
+    with pytest.raises(ValueError, match="layers"):
+        reconstruct_video(video, tmp_path / "bad", layers="frames")
+    assert not (tmp_path / "bad").exists()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("find, motion", [(vtest_avi, "still"), (bikes_mp4, "pan")])
 def test_real_footage_reads_with_the_right_camera(find, motion):
