@@ -73,8 +73,8 @@ class SceneWorld:
         return self._scene.duration
 
     def gaussians(self, t: Optional[float] = None) -> Gaussians:
-        """World Gaussians at time t (default now); cached, not to be modified."""
-        return self._scene.at(self.t if t is None else t)
+        """World Gaussians drawn at time t (default now), to render; cached, not to be modified."""
+        return self._scene.drawn_at(self.t if t is None else t)
 
     # ------------------------------------------------------------ the target
     @property
@@ -91,7 +91,7 @@ class SceneWorld:
         key = (self.target.id, t)
         pos = known.get(key)
         if pos is None:
-            pos = self.gaussians(t).means[self._index].mean(axis=0, dtype=np.float64)
+            pos = _mean_drawn(self._scene, t, self._index)
             if len(known) < _POSITIONS_PER_SCENE:
                 known[key] = pos
         return pos.copy()
@@ -102,5 +102,13 @@ class SceneWorld:
         scene = self._scene if self._index.size else self._original
         index = self._index if self._index.size else self._original_index
         times = np.linspace(0.0, self.duration, n)
-        out = np.array([scene.at(float(t)).means[index].mean(axis=0, dtype=np.float64) for t in times])
+        out = np.array([_mean_drawn(scene, float(t), index) for t in times])
         return out
+
+
+def _mean_drawn(scene: Scene4D, t: float, index: np.ndarray) -> np.ndarray:
+    """[3] mean position at time t of the Gaussians `index` that are drawn then (all of them when none is)."""
+    drawn = scene.drawn(t)
+    if drawn is not None and drawn[index].any():
+        index = index[drawn[index]]
+    return scene.at(t).means[index].mean(axis=0, dtype=np.float64)

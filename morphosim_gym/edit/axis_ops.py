@@ -89,7 +89,7 @@ def _append(scene: Scene4D, new: Gaussians, node: int, objects: tuple[SceneObjec
     if node >= 0:
         nodes[:, 0], weights[:, 0] = node, 1.0
     motion = Motion(m.rotations, m.translations, np.concatenate([m.skin_nodes[keep], nodes]),
-                    np.concatenate([m.skin_weights[keep], weights]), m.node_objects)
+                    np.concatenate([m.skin_weights[keep], weights]), m.node_objects, m.shown)
     motion.rotations = m.rotations          # the stored bits (Motion re-normalises on construction)
     return scene.derive(label, gaussians=merged, motion=motion, objects=objects)
 

@@ -76,7 +76,7 @@ def recolor(scene: Scene4D, selection: np.ndarray, mode: str, rgb: Sequence[floa
 def _keep(scene: Scene4D, keep: np.ndarray, label: str | None) -> Scene4D:
     g = scene.gaussians.subset(keep)
     m = scene.motion
-    motion = Motion(m.rotations, m.translations, m.skin_nodes[keep], m.skin_weights[keep], m.node_objects)
+    motion = Motion(m.rotations, m.translations, m.skin_nodes[keep], m.skin_weights[keep], m.node_objects, m.shown)
     motion.rotations = m.rotations  # keep the stored bits (Motion re-normalises on construction)
     present = set(np.unique(g.object_ids).tolist())
     objects = tuple(o for o in scene.objects if o.id in present)
@@ -119,7 +119,8 @@ def ensure_nodes(scene: Scene4D, object_ids: Sequence[int]) -> Scene4D:
         nodes[sel, 0] = m.num_nodes + k
         weights[sel] = 0.0
         weights[sel, 0] = 1.0
-    motion = Motion(rot, trans, nodes, weights, np.concatenate([m.node_objects, missing]))
+    shown = None if m.shown is None else np.concatenate([m.shown, np.ones((T, len(missing)), bool)], axis=1)
+    motion = Motion(rot, trans, nodes, weights, np.concatenate([m.node_objects, missing]), shown)
     return scene.derive(None, motion=motion)
 
 
@@ -129,7 +130,7 @@ def _with_node_poses(scene: Scene4D, nodes: np.ndarray, rot: np.ndarray, trans: 
     r, t = m.rotations.copy(), m.translations.copy()
     r[:, nodes] = rot
     t[:, nodes] = trans
-    motion = Motion(r, t, m.skin_nodes, m.skin_weights, m.node_objects)
+    motion = Motion(r, t, m.skin_nodes, m.skin_weights, m.node_objects, m.shown)
     untouched = np.setdiff1d(np.arange(m.num_nodes), nodes)
     motion.rotations[:, untouched] = m.rotations[:, untouched]   # bit-exact for the rest
     objects = tuple(o.__class__(o.id, o.name, o.category, o.color, dynamic, o.role) if o.id in set(object_ids) else o

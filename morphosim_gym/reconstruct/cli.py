@@ -31,8 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     video.add_argument("--size", type=int, default=160, help="longer side of the frames in pixels (160)")
     video.add_argument("--layers", choices=("auto", "movers", "none"), default="auto",
                        help="what is drawn over the fit: auto (a panning video's frames as layers, a still "
-                            "one's movers over a background plate), movers (no frame layers: a smaller, "
-                            "faster scene for a pan), none (the fit alone)")
+                            "one's movers over a background plate), movers (no frame layers: a smaller "
+                            "scene file for a pan), none (the fit alone)")
     video.add_argument("--camera", choices=CAMERA_MODES, default="auto",
                        help="auto: estimate a pan from the frames, still if it stays under 0.5 deg")
     p.add_argument("--report", action="store_true", help="print PSNR/SSIM on input and novel views, IoU, time")

@@ -87,9 +87,8 @@ def reconstruct_video(path: str | Path, out_dir: str | Path, fov_deg: float = 50
     """Read `path`, fit, write the scene, the preview and the summary into `out_dir` (created).
 
     `layers` (`LAYER_CHOICES`): "auto" (`LayerConfig()`: a moving camera's frames as layers, a still
-    one's movers over a plate), "movers" (no frame layers: a panning video's scene ~2.5x smaller and
-    its env steps ~3x faster, its held-out frames ~2 dB worse on bikes.mp4) or "none" (the scaffold
-    fit alone). Extra keyword arguments go to `GeneratedClip.from_video` (fps, camera_height,
+    one's movers over a plate), "movers" (no frame layers: a panning video's scene file ~2.5x
+    smaller, its held-out frames ~2 dB worse on bikes.mp4) or "none" (the scaffold fit alone). Extra keyword arguments go to `GeneratedClip.from_video` (fps, camera_height,
     pitch_deg, shot)."""
     if layers not in LAYER_CHOICES:
         raise ValueError(f"Expected layers in {sorted(LAYER_CHOICES)}, found {layers!r}")

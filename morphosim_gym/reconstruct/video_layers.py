@@ -11,7 +11,7 @@ between score below simply showing the previous frame. `motion_layers` adds to a
   depth prior (a little nearer the camera) as pixel-sized Gaussians, bound to a node of their own;
 * the node's poses on a timeline of half steps (motion frame 2k is fitted frame k): identity at
   2k, half the region's image motion towards frame k - 1 (masked template matching,
-  `region_flows`) at 2k - 1, and far behind the camera otherwise (hidden). So a fitted frame
+  `region_flows`) at 2k - 1, and not shown otherwise (`Motion.shown`). So a fitted frame
   shows its own layer, and the time half-way between two fitted frames shows the later one's
   layers moved half-way back (`LayerConfig.between`: or the earlier one's moved on, or both);
 * for a still camera, a background plate: the per-pixel median of the frames over the pixels no
@@ -51,7 +51,6 @@ from .object_features import object_prototypes
 
 __all__ = ["LayerConfig", "LayerPriors", "coarse_guesses", "layer_priors", "motion_layers", "region_flows"]
 
-HIDE_DISTANCE = 1e4      # metres behind the camera a layer waits while it is not shown
 BETWEEN = {"next": (-1,), "previous": (1,), "both": (-1, 1)}   # LayerConfig.between -> the half steps a layer shows at
 
 
@@ -240,6 +239,7 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
         moving &= _differs_from_plate(clip.frames, plate, cfg.plate_level)
     parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
     trans: list[np.ndarray] = []
+    shown: list[np.ndarray] = []
     for k in range(t):
         count, labels, stats, _ = cv2.connectedComponentsWithStats(moving[k].astype(np.uint8), connectivity=8)
         keep = [r for r in range(1, count) if stats[r, cv2.CC_STAT_AREA] >= cfg.min_area]
@@ -250,18 +250,19 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
                                  coarse_guesses(clip.frames, k, k + d, labels, count - 1, reach, cfg.keep_still)
                                  if cfg.coarse_to_fine else None)
                  for d in BETWEEN[cfg.between] if 0 <= k + d < t}
-        hide = -cams[k].forward * HIDE_DISTANCE
         for r in keep:
             rows, cols = np.nonzero(labels == r)
             z = priors.depth[k, rows, cols].astype(np.float64) * (1.0 - cfg.layer_offset)
             pts, fp = _lift(cams[k], rows, cols, z)
             node = len(trans)
-            path = np.repeat(hide[None], 2 * t - 1, axis=0)
-            path[2 * k] = 0.0
+            path, seen = np.zeros((2 * t - 1, 3)), np.zeros(2 * t - 1, bool)
+            seen[2 * k] = True
             centre = np.array([cols.mean() + 0.5, rows.mean() + 0.5])
             for d, fl in flows.items():
                 path[2 * k + d] = 0.5 * _displacement(cams, k, k + d, centre, float(np.median(z)), fl[r - 1])
+                seen[2 * k + d] = True
             trans.append(path)
+            shown.append(seen)
             parts["means"].append(pts)
             parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
             parts["footprint"].append(fp)
@@ -272,6 +273,7 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
         return {}
     out = {k: np.concatenate(v) for k, v in parts.items()}
     out["trans"] = np.stack(trans, axis=1)                     # [2T - 1, K, 3]
+    out["shown"] = np.stack(shown, axis=1)                     # [2T - 1, K]
     return out
 
 
@@ -283,6 +285,7 @@ def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: L
     cams = clip.cameras
     parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
     trans: list[np.ndarray] = []
+    shown: list[np.ndarray] = []
     layer_depth = np.zeros((t, h, w))
     for k in range(t):
         depth = _fill_nearest(priors.depth[k], np.ones((h, w), bool))
@@ -290,13 +293,14 @@ def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: L
             continue                                     # no depth anywhere in this frame
         layer_depth[k] = depth * (1.0 - cfg.frame_offset)
         ids = np.where(priors.masks[k] >= 0, priors.masks[k], setting)
-        path = np.repeat((-cams[k].forward * HIDE_DISTANCE)[None], 2 * t - 1, axis=0)
-        path[2 * k:2 * k + 2] = 0.0                        # shown at its frame and the half step after
+        seen = np.zeros(2 * t - 1, bool)
+        seen[2 * k:2 * k + 2] = True                       # shown at its frame and the half step after
         for obj in np.unique(ids):
             rows, cols = np.nonzero(ids == obj)
             pts, fp = _lift(cams[k], rows, cols, layer_depth[k, rows, cols])
             parts["node"].append(np.full(len(rows), len(trans)))
-            trans.append(path)
+            trans.append(np.zeros((2 * t - 1, 3)))
+            shown.append(seen)
             parts["means"].append(pts)
             parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
             parts["footprint"].append(fp)
@@ -305,7 +309,7 @@ def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: L
     if not trans:
         return {}
     out = {k: np.concatenate(v) for k, v in parts.items()}
-    out["trans"], out["depth"] = np.stack(trans, axis=1), layer_depth
+    out["trans"], out["shown"], out["depth"] = np.stack(trans, axis=1), np.stack(shown, axis=1), layer_depth
     return out
 
 
@@ -315,7 +319,8 @@ def _merge_layers(first: dict[str, np.ndarray], second: dict[str, np.ndarray]) -
         return first or second
     out = {k: np.concatenate([first[k], second[k] + (first["trans"].shape[1] if k == "node" else 0)])
            for k in ("means", "colors", "footprint", "ids", "node", "pixel")}
-    out["trans"] = np.concatenate([first["trans"], second["trans"]], axis=1)
+    for k in ("trans", "shown"):
+        out[k] = np.concatenate([first[k], second[k]], axis=1)
     return out
 
 
@@ -435,7 +440,7 @@ def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep:
         rot, tr, node_objects, kept_nodes, kept_weights = _half_step_motion(scene.motion, keep, 2 * clip.num_frames - 1)
     else:                                   # no layers: the fitted timeline, motion and cameras as they are
         fitted = scene.motion
-        rot, tr, node_objects = fitted.rotations, fitted.translations, fitted.node_objects
+        rot, tr, node_objects, shown = fitted.rotations, fitted.translations, fitted.node_objects, fitted.shown
         kept_nodes, kept_weights = fitted.skin_nodes[keep], fitted.skin_weights[keep]
     slots = max(1, kept_nodes.shape[1])
     skin_nodes = np.full((n, slots), -1, np.int32)
@@ -451,11 +456,12 @@ def _assemble(scene: Scene4D, clip: GeneratedClip, parts: list[Gaussians], keep:
         count = layers["trans"].shape[1]
         identity = np.zeros((frames, count, 4))
         identity[..., 0] = 1.0
+        shown = np.concatenate([np.ones((frames, rot.shape[1]), bool), layers["shown"]], axis=1)
         rot, tr = np.concatenate([rot, identity], axis=1), np.concatenate([tr, layers["trans"]], axis=1)
         first = np.unique(layers["node"], return_index=True)[1]
         node_objects = np.concatenate([node_objects, layers["ids"][first]]).astype(np.int32)
         objects = tuple(replace(o, dynamic=o.dynamic or o.id in movers) for o in scene.objects)
-    motion = Motion(rot, tr, skin_nodes, skin_weights, node_objects)
+    motion = Motion(rot, tr, skin_nodes, skin_weights, node_objects, shown)
     cameras = _half_step_cameras(clip.cameras) if layers else scene.cameras
     return Scene4D(gaussians, motion, objects, clip.fps * (2.0 if layers else 1.0), cameras,
                    decoders=scene.decoders, provenance=scene.provenance, background=scene.background, sky=scene.sky,

@@ -496,7 +496,7 @@ def _source_parts(source: Source, t: float, background: Optional[Sequence[float]
     gaussians = []
     for p in parts:
         if isinstance(p, Scene4D):
-            gaussians.append(p.at(t))
+            gaussians.append(p.drawn_at(t))
         elif isinstance(p, Gaussians):
             gaussians.append(p)
         else:

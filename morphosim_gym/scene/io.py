@@ -64,7 +64,8 @@ def _scene_from(meta: dict, arrays: dict[str, np.ndarray], parent: Scene4D | Non
     g = Gaussians(**{k: arrays.get(f"gaussians/{k}") for k in
                      ("means", "quats", "scales", "opacities", "colors", "features", "object_ids")})
     motion = Motion(**{k: arrays[f"motion/{k}"] for k in
-                       ("rotations", "translations", "skin_nodes", "skin_weights", "node_objects")})
+                       ("rotations", "translations", "skin_nodes", "skin_weights", "node_objects")},
+                    shown=arrays.get("motion/shown"))
     decoders = {}
     for name, dm in meta["decoders"].items():
         prefix = f"decoders/{name}/"

@@ -30,6 +30,9 @@ class Motion:
         skin_nodes: [N, M] int32 node index per binding, -1 for an unused slot.
         skin_weights: [N, M] float32 binding weights; each bound row sums to 1.
         node_objects: [K] int32 object id each node belongs to (-1 for none).
+        shown: [T, K] bool, where each node is drawn (None: every node at every frame). A Gaussian
+            bound to a node not shown at the frame nearest a time is not drawn then (a video's
+            per-frame layers are shown only around their own frame).
     """
 
     rotations: np.ndarray
@@ -37,6 +40,7 @@ class Motion:
     skin_nodes: np.ndarray
     skin_weights: np.ndarray
     node_objects: np.ndarray
+    shown: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.rotations = np.ascontiguousarray(self.rotations, dtype=np.float64)
@@ -73,6 +77,12 @@ class Motion:
                              f"found sums in [{sums[rows].min():.4f}, {sums[rows].max():.4f}]")
         if self.node_objects.shape != (k,):
             raise ValueError(f"Expected node_objects of shape ({k},), found {self.node_objects.shape}")
+        if self.shown is not None:
+            shown = np.asarray(self.shown)
+            if shown.shape != r.shape[:2] or shown.dtype != np.bool_:
+                raise ValueError(f"Expected shown as a bool array of shape {r.shape[:2]}, found "
+                                 f"{shown.dtype} {shown.shape}")
+            self.shown = np.ascontiguousarray(shown)
 
     # ------------------------------------------------------------ constructors
     @classmethod
@@ -127,10 +137,36 @@ class Motion:
         rot, trans = self.node_poses(frame)
         return skin(means, quats, self.skin_nodes, self.skin_weights, rot, trans)
 
+    def drawn(self, frame: float) -> np.ndarray | None:
+        """[N] bool: the Gaussians drawn at a fractional frame index (every bound node shown at the
+        nearest frame; unbound ones always), or None when every Gaussian is drawn at every frame."""
+        if self.shown is None:
+            return None
+        f = min(max(int(np.floor(float(frame) + 0.5)), 0), self.num_frames - 1)
+        shown = self.shown[f]
+        if shown.all():
+            return None
+        rows, nodes = self._bindings()
+        out = np.ones(self.num_gaussians, bool)
+        out[rows[~shown[nodes]]] = False
+        return out
+
+    def _bindings(self) -> tuple[np.ndarray, np.ndarray]:
+        """(row, node) of every binding of a Gaussian to a node, computed once: a scene freezes
+        its skinning arrays."""
+        cached = self.__dict__.get("_bindings_cache")
+        if cached is None:
+            row, slot = np.nonzero(self.skin_nodes >= 0)
+            cached = self.__dict__["_bindings_cache"] = (row, self.skin_nodes[row, slot])
+        return cached
+
     def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays that define this motion, by field name."""
-        return {"rotations": self.rotations, "translations": self.translations, "skin_nodes": self.skin_nodes,
-                "skin_weights": self.skin_weights, "node_objects": self.node_objects}
+        """The arrays that define this motion, by field name (`shown` only when set)."""
+        out = {"rotations": self.rotations, "translations": self.translations, "skin_nodes": self.skin_nodes,
+               "skin_weights": self.skin_weights, "node_objects": self.node_objects}
+        if self.shown is not None:
+            out["shown"] = self.shown
+        return out
 
     def copy(self, **changes: Any) -> "Motion":
         """A copy with some arrays replaced (the others copied)."""

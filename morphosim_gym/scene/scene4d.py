@@ -15,13 +15,14 @@ import numpy as np
 from .camera import Camera
 from .features import FeatureDecoder
 from .gaussians import Gaussians
-from .motion import Motion
+from .motion import Motion, skin
 from .sky import check_sky
 
 __all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE", "POSE_CACHE_BYTES"]
 
 POSE_CACHE_SIZE = 4     # posed Gaussians always kept per scene (by time), least recently used dropped first
 POSE_CACHE_BYTES = 8 << 20
+DRAWN_SUBSET = 0.25      # `drawn_at` gives a subset of the rows when at most this share is drawn
 """More times are kept while a scene's posed means and quats take at most this many bytes: a
 4k-Gaussian scene (114 KB a time) keeps ~70 times, a whole 60-step episode at 10 Hz, so pooled
 scenes are skinned once per time, not once per episode; a 200k-Gaussian scene keeps the 4."""
@@ -176,21 +177,24 @@ class Scene4D:
         _freeze(self.gaussians)
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
-        self._poses: OrderedDict[float, Gaussians] = OrderedDict()   # frame index -> posed Gaussians (LRU)
+        self._poses: OrderedDict[Any, Gaussians] = OrderedDict()   # frame index (or ("drawn", it)) -> posed (LRU)
         self._pose_bytes = 0                                          # bytes of their means and quats
         self._poses_lock = threading.Lock()
+        self._shown: OrderedDict[int, dict | None] = OrderedDict()    # frame -> its drawn rows (`_drawn_rows`)
         self._hash: str | None = None
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
         state.pop("_poses_lock")
-        state["_poses"] = OrderedDict()          # a cache, rebuilt on demand
+        state["_poses"] = OrderedDict()          # caches, rebuilt on demand
+        state["_shown"] = OrderedDict()
         state["_pose_bytes"] = 0
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
         self.__dict__.setdefault("_pose_bytes", 0)     # a pickle from before the byte budget
+        self.__dict__.setdefault("_shown", OrderedDict())
         self._poses_lock = threading.Lock()
 
     # -------------------------------------------------------------- time
@@ -225,26 +229,83 @@ class Scene4D:
 
         The arrays are read-only (`flags.writeable` False) and shared: the last `POSE_CACHE_SIZE`
         times asked are kept, so callers may interleave times freely at no extra skinning cost.
-        Use `.numpy()` on the result for a copy of one's own to modify.
+        Use `.numpy()` on the result for a copy of one's own to modify. Gaussians not drawn at `t`
+        (`drawn`) are here with opacity 0; `drawn_at` leaves them out.
         """
         frame = self.frame_index(t)
-        with self._poses_lock:
-            g = self._poses.get(frame)
-            if g is not None:
-                self._poses.move_to_end(frame)
-                return g
+        cached = self._cached(frame)
+        if cached is not None:
+            return cached
         c = self.gaussians
         means, quats = self.motion.apply(c.means, c.quats, frame)
-        means.setflags(write=False)
-        quats.setflags(write=False)
-        g = Gaussians._trusted(means=means, quats=quats, scales=c.scales, opacities=c.opacities, colors=c.colors,
-                               features=c.features, object_ids=c.object_ids)
+        rows = self._drawn_rows(frame)
+        return self._cache(frame, Gaussians._trusted(
+            means=_frozen(means), quats=_frozen(quats), scales=c.scales,
+            opacities=c.opacities if rows is None else rows["opacities"], colors=c.colors, features=c.features,
+            object_ids=c.object_ids))
+
+    def drawn(self, t: float = 0.0) -> np.ndarray | None:
+        """[N] bool: the Gaussians drawn at time `t` (`Motion.shown`), or None when all are."""
+        rows = self._drawn_rows(self.frame_index(t))
+        return None if rows is None else rows["mask"]
+
+    def drawn_at(self, t: float = 0.0) -> Gaussians:
+        """The Gaussians drawn at time `t`, posed: only the drawn rows (skinned alone, cached like
+        `at`) when they are at most `DRAWN_SUBSET` of the scene, else `at(t)` itself (whose rows not
+        drawn have opacity 0: copying most rows costs more than drawing nothing there). What a
+        renderer needs."""
+        frame = self.frame_index(t)
+        rows = self._drawn_rows(frame)
+        if rows is None or len(rows["rows"]) > DRAWN_SUBSET * len(self.gaussians):
+            return self.at(t)                     # (its undrawn rows have opacity 0)
+        cached = self._cached(("drawn", frame))
+        if cached is not None:
+            return cached
+        c, m, index = self.gaussians, self.motion, rows["rows"]
+        if "parts" not in rows:                   # the drawn rows' fixed arrays, once per frame kept
+            rows["parts"] = {k: None if getattr(c, k) is None else _frozen(getattr(c, k)[index])
+                             for k in ("means", "quats", "scales", "opacities", "colors", "features", "object_ids")}
+            rows["skin"] = (m.skin_nodes[index], m.skin_weights[index])
+        parts = dict(rows["parts"])
+        rot, trans = m.node_poses(frame)
+        means, quats = skin(parts.pop("means"), parts.pop("quats"), *rows["skin"], rot, trans)
+        return self._cache(("drawn", frame), Gaussians._trusted(means=_frozen(means), quats=_frozen(quats), **parts))
+
+    def _drawn_rows(self, frame: float) -> dict | None:
+        """Which rows are drawn at the frame nearest `frame` (`mask`, `rows`) and their opacities for
+        `at` (0 where not drawn), kept for the last `POSE_CACHE_SIZE` frames asked (None when every
+        Gaussian is drawn); `drawn_at` adds the drawn rows' arrays."""
+        key = min(max(int(np.floor(frame + 0.5)), 0), self.motion.num_frames - 1)
         with self._poses_lock:
-            if frame not in self._poses:
-                self._poses[frame] = g
-                self._pose_bytes += _posed_bytes(g)
+            if key in self._shown:
+                self._shown.move_to_end(key)
+                return self._shown[key]
+        mask = self.motion.drawn(key)
+        out = None
+        if mask is not None:
+            opacities = self.gaussians.opacities
+            out = {"mask": _frozen(mask), "rows": np.flatnonzero(mask),
+                   "opacities": _frozen(np.where(mask, opacities, 0).astype(opacities.dtype))}
+        with self._poses_lock:
+            self._shown[key] = out
+            while len(self._shown) > POSE_CACHE_SIZE:
+                self._shown.popitem(last=False)
+        return out
+
+    def _cached(self, key: Any) -> Gaussians | None:
+        with self._poses_lock:
+            g = self._poses.get(key)
+            if g is not None:
+                self._poses.move_to_end(key)
+            return g
+
+    def _cache(self, key: Any, g: Gaussians) -> Gaussians:
+        with self._poses_lock:
+            if key not in self._poses:
+                self._poses[key] = g
+                self._pose_bytes += _posed_bytes(g, self.gaussians)
             while len(self._poses) > POSE_CACHE_SIZE and self._pose_bytes > POSE_CACHE_BYTES:
-                self._pose_bytes -= _posed_bytes(self._poses.popitem(last=False)[1])
+                self._pose_bytes -= _posed_bytes(self._poses.popitem(last=False)[1], self.gaussians)
         return g
 
     def centre(self, t: float = 0.0) -> np.ndarray:
@@ -253,6 +314,9 @@ class Scene4D:
         depth of all Gaussians if there are none). Orbits, novel views and camera edits turn about it."""
         cam = self.camera_at(t)
         g = self.at(t)
+        drawn = self.drawn(t)
+        if drawn is not None:
+            g = g.subset(drawn)
         fg = np.isin(g.object_ids, [o.id for o in self.objects if o.role != "background"])
         pts = g.means[fg] if fg.any() else g.means
         if len(pts) == 0:
@@ -293,12 +357,15 @@ class Scene4D:
         return {o.id: o.name for o in self.objects}
 
     def object_center(self, key: int | str, t: float = 0.0) -> np.ndarray:
-        """[3] mean position of an object's Gaussians at time t."""
+        """[3] mean position of an object's Gaussians drawn at time t (all of them when none is)."""
         obj = self.object(key)
         g = self.at(t)
         sel = g.object_ids == obj.id
         if not np.any(sel):
             raise ValueError(f"Expected Gaussians for object {obj.name!r}, found none")
+        drawn = self.drawn(t)
+        if drawn is not None and np.any(sel & drawn):
+            sel &= drawn
         return g.means[sel].mean(axis=0).astype(np.float64)
 
     # ------------------------------------------------------------ editing
@@ -415,6 +482,12 @@ def cameras_from_dicts(items: Sequence[Mapping[str, Any]]) -> tuple[Camera, ...]
     return tuple(Camera.from_dict(dict(c)) for c in items)
 
 
-def _posed_bytes(g: Gaussians) -> int:
-    """Bytes a pose-cache entry holds of its own (its means and quats; the rest is the scene's)."""
-    return int(g.means.nbytes + g.quats.nbytes)
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+def _posed_bytes(g: Gaussians, own: Gaussians) -> int:
+    """Bytes a pose-cache entry holds of its own (its arrays that are not the scene's `own`)."""
+    return sum(int(a.nbytes) for f in fields(g) if (a := getattr(g, f.name)) is not None
+               and a is not getattr(own, f.name))
