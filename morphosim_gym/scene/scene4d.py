@@ -238,7 +238,7 @@ class Scene4D:
             return cached
         c = self.gaussians
         means, quats = self.motion.apply(c.means, c.quats, frame)
-        rows = self._drawn_rows(frame)
+        rows = None if self.motion.shown is None else self._drawn_rows(frame)
         return self._cache(frame, Gaussians._trusted(
             means=_frozen(means), quats=_frozen(quats), scales=c.scales,
             opacities=c.opacities if rows is None else rows["opacities"], colors=c.colors, features=c.features,
@@ -246,6 +246,9 @@ class Scene4D:
 
     def drawn(self, t: float = 0.0) -> np.ndarray | None:
         """[N] bool: the Gaussians drawn at time `t` (`Motion.shown`), or None when all are."""
+        if self.motion.shown is None:
+            self.frame_index(t)                   # (checks t)
+            return None
         rows = self._drawn_rows(self.frame_index(t))
         return None if rows is None else rows["mask"]
 
@@ -254,6 +257,8 @@ class Scene4D:
         `at`) when they are at most `DRAWN_SUBSET` of the scene, else `at(t)` itself (whose rows not
         drawn have opacity 0: copying most rows costs more than drawing nothing there). What a
         renderer needs."""
+        if self.motion.shown is None:             # the usual scene: everything, every frame
+            return self.at(t)
         frame = self.frame_index(t)
         rows = self._drawn_rows(frame)
         if rows is None or len(rows["rows"]) > DRAWN_SUBSET * len(self.gaussians):
