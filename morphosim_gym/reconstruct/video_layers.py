@@ -478,10 +478,10 @@ def _refine_colours(scene: Scene4D, clip: GeneratedClip, spans: dict[str, slice]
                     targets: dict[str, np.ndarray], rounds: int, step_size: float = 1.0) -> Scene4D:
     """Undo the renderer's blur on the plate and layer colours: each round adds every Gaussian's
     pixel residual (its frame minus the render there) to its colour (Van Cittert iteration)."""
-    shown = np.unique(np.concatenate([px[:, 0] for px in pixels.values()] or [np.zeros(0, int)]))
+    fitted = np.unique(np.concatenate([px[:, 0] for px in pixels.values()] or [np.zeros(0, int)]))
     for _ in range(rounds):
         colors = np.array(scene.gaussians.colors, np.float64)
-        for k in shown:                                   # each fitted frame rendered once a round
+        for k in fitted:                                  # each fitted frame rendered once a round
             img = _render(scene, clip.cameras[int(k)], float(k) / clip.fps)
             for name, sl in spans.items():
                 px = pixels[name]

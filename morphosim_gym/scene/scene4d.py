@@ -22,10 +22,10 @@ __all__ = ["SceneObject", "Provenance", "Scene4D", "POSE_CACHE_SIZE", "POSE_CACH
 
 POSE_CACHE_SIZE = 4     # posed Gaussians always kept per scene (by time), least recently used dropped first
 POSE_CACHE_BYTES = 8 << 20
-DRAWN_SUBSET = 0.25      # `drawn_at` gives a subset of the rows when at most this share is drawn
 """More times are kept while a scene's posed means and quats take at most this many bytes: a
 4k-Gaussian scene (114 KB a time) keeps ~70 times, a whole 60-step episode at 10 Hz, so pooled
 scenes are skinned once per time, not once per episode; a 200k-Gaussian scene keeps the 4."""
+DRAWN_SUBSET = 0.25      # `drawn_at` gives a subset of the rows when at most this share is drawn
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,7 @@ class Scene4D:
         for arr in self.motion.arrays().values():
             arr.setflags(write=False)
         self._poses: OrderedDict[Any, Gaussians] = OrderedDict()   # frame index (or ("drawn", it)) -> posed (LRU)
-        self._pose_bytes = 0                                          # bytes of their means and quats
+        self._pose_bytes = 0                                          # bytes of their own arrays
         self._poses_lock = threading.Lock()
         self._shown: OrderedDict[int, dict | None] = OrderedDict()    # frame -> its drawn rows (`_drawn_rows`)
         self._hash: str | None = None
