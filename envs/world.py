@@ -91,7 +91,7 @@ class SceneWorld:
         key = (self.target.id, t)
         pos = known.get(key)
         if pos is None:
-            pos = _mean_drawn(self._scene, t, self._index)
+            pos = self._scene.rows_center(self._index, t)
             if len(known) < _POSITIONS_PER_SCENE:
                 known[key] = pos
         return pos.copy()
@@ -102,13 +102,6 @@ class SceneWorld:
         scene = self._scene if self._index.size else self._original
         index = self._index if self._index.size else self._original_index
         times = np.linspace(0.0, self.duration, n)
-        out = np.array([_mean_drawn(scene, float(t), index) for t in times])
+        out = np.array([scene.rows_center(index, float(t)) for t in times])
         return out
 
-
-def _mean_drawn(scene: Scene4D, t: float, index: np.ndarray) -> np.ndarray:
-    """[3] mean position at time t of the Gaussians `index` that are drawn then (all of them when none is)."""
-    drawn = scene.drawn(t)
-    if drawn is not None and drawn[index].any():
-        index = index[drawn[index]]
-    return scene.at(t).means[index].mean(axis=0, dtype=np.float64)

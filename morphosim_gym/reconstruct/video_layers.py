@@ -226,6 +226,36 @@ def _differs_from_plate(frames: np.ndarray, plate: np.ndarray, level: float) -> 
     return np.abs(frames.astype(np.float64) - plate[None] * 255.0).max(axis=-1) > level
 
 
+class _LayerSet:
+    """Layers being built: each `add` is one node, its pixels of frame k lifted at their depths,
+    its translation on the half-step timeline and the motion frames it is shown at."""
+
+    KEYS = ("means", "colors", "footprint", "ids", "node", "pixel")
+
+    def __init__(self) -> None:
+        self.parts: dict[str, list[np.ndarray]] = {key: [] for key in self.KEYS}
+        self.trans: list[np.ndarray] = []
+        self.shown: list[np.ndarray] = []
+
+    def add(self, clip: GeneratedClip, k: int, rows: np.ndarray, cols: np.ndarray, depth: np.ndarray,
+            ids: np.ndarray, path: np.ndarray, seen: np.ndarray) -> None:
+        pts, fp = _lift(clip.cameras[k], rows, cols, depth)
+        for key, value in (("means", pts), ("colors", clip.frames[k, rows, cols].astype(np.float64) / 255.0),
+                           ("footprint", fp), ("ids", ids), ("node", np.full(len(rows), len(self.trans))),
+                           ("pixel", np.stack([np.full(len(rows), k), rows, cols], axis=1))):
+            self.parts[key].append(value)
+        self.trans.append(path)
+        self.shown.append(seen)
+
+    def result(self) -> dict[str, np.ndarray]:
+        """The layers' arrays, "trans" [2T - 1, K, 3] and "shown" [2T - 1, K] ({} when none was added)."""
+        if not self.trans:
+            return {}
+        out = {key: np.concatenate(v) for key, v in self.parts.items()}
+        out["trans"], out["shown"] = np.stack(self.trans, axis=1), np.stack(self.shown, axis=1)
+        return out
+
+
 def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
             plate: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """The movers' Gaussians of every frame and their nodes' translations on the half-step timeline
@@ -237,9 +267,7 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
     moving = np.isin(priors.masks, priors.movers) & (priors.depth > 0)
     if plate is not None:
         moving &= _differs_from_plate(clip.frames, plate, cfg.plate_level)
-    parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
-    trans: list[np.ndarray] = []
-    shown: list[np.ndarray] = []
+    built = _LayerSet()
     for k in range(t):
         count, labels, stats, _ = cv2.connectedComponentsWithStats(moving[k].astype(np.uint8), connectivity=8)
         keep = [r for r in range(1, count) if stats[r, cv2.CC_STAT_AREA] >= cfg.min_area]
@@ -253,28 +281,14 @@ def _layers(clip: GeneratedClip, priors: LayerPriors, cfg: LayerConfig,
         for r in keep:
             rows, cols = np.nonzero(labels == r)
             z = priors.depth[k, rows, cols].astype(np.float64) * (1.0 - cfg.layer_offset)
-            pts, fp = _lift(cams[k], rows, cols, z)
-            node = len(trans)
             path, seen = np.zeros((2 * t - 1, 3)), np.zeros(2 * t - 1, bool)
             seen[2 * k] = True
             centre = np.array([cols.mean() + 0.5, rows.mean() + 0.5])
             for d, fl in flows.items():
                 path[2 * k + d] = 0.5 * _displacement(cams, k, k + d, centre, float(np.median(z)), fl[r - 1])
                 seen[2 * k + d] = True
-            trans.append(path)
-            shown.append(seen)
-            parts["means"].append(pts)
-            parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
-            parts["footprint"].append(fp)
-            parts["ids"].append(priors.masks[k, rows, cols])
-            parts["node"].append(np.full(len(rows), node))
-            parts["pixel"].append(np.stack([np.full(len(rows), k), rows, cols], axis=1))
-    if not trans:
-        return {}
-    out = {k: np.concatenate(v) for k, v in parts.items()}
-    out["trans"] = np.stack(trans, axis=1)                     # [2T - 1, K, 3]
-    out["shown"] = np.stack(shown, axis=1)                     # [2T - 1, K]
-    return out
+            built.add(clip, k, rows, cols, z, priors.masks[k, rows, cols], path, seen)
+    return built.result()
 
 
 def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: LayerConfig) -> dict[str, np.ndarray]:
@@ -282,10 +296,7 @@ def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: L
     nearest known pixel's), one node per frame and object, shown at motion frames 2k and 2k + 1;
     "depth" holds each frame's layer depth [T, H, W] (0 where the frame has no layer)."""
     t, h, w = priors.depth.shape
-    cams = clip.cameras
-    parts: dict[str, list] = {"means": [], "colors": [], "footprint": [], "ids": [], "node": [], "pixel": []}
-    trans: list[np.ndarray] = []
-    shown: list[np.ndarray] = []
+    built = _LayerSet()
     layer_depth = np.zeros((t, h, w))
     for k in range(t):
         depth = _fill_nearest(priors.depth[k], np.ones((h, w), bool))
@@ -297,19 +308,11 @@ def _frame_layers(clip: GeneratedClip, priors: LayerPriors, setting: int, cfg: L
         seen[2 * k:2 * k + 2] = True                       # shown at its frame and the half step after
         for obj in np.unique(ids):
             rows, cols = np.nonzero(ids == obj)
-            pts, fp = _lift(cams[k], rows, cols, layer_depth[k, rows, cols])
-            parts["node"].append(np.full(len(rows), len(trans)))
-            trans.append(np.zeros((2 * t - 1, 3)))
-            shown.append(seen)
-            parts["means"].append(pts)
-            parts["colors"].append(clip.frames[k, rows, cols].astype(np.float64) / 255.0)
-            parts["footprint"].append(fp)
-            parts["ids"].append(np.full(len(rows), obj))
-            parts["pixel"].append(np.stack([np.full(len(rows), k), rows, cols], axis=1))
-    if not trans:
-        return {}
-    out = {k: np.concatenate(v) for k, v in parts.items()}
-    out["trans"], out["shown"], out["depth"] = np.stack(trans, axis=1), np.stack(shown, axis=1), layer_depth
+            built.add(clip, k, rows, cols, layer_depth[k, rows, cols], np.full(len(rows), obj),
+                      np.zeros((2 * t - 1, 3)), seen)
+    out = built.result()
+    if out:
+        out["depth"] = layer_depth
     return out
 
 
@@ -318,7 +321,7 @@ def _merge_layers(first: dict[str, np.ndarray], second: dict[str, np.ndarray]) -
     if not first or not second:
         return first or second
     out = {k: np.concatenate([first[k], second[k] + (first["trans"].shape[1] if k == "node" else 0)])
-           for k in ("means", "colors", "footprint", "ids", "node", "pixel")}
+           for k in _LayerSet.KEYS}
     for k in ("trans", "shown"):
         out[k] = np.concatenate([first[k], second[k]], axis=1)
     return out

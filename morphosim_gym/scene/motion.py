@@ -137,13 +137,16 @@ class Motion:
         rot, trans = self.node_poses(frame)
         return skin(means, quats, self.skin_nodes, self.skin_weights, rot, trans)
 
+    def nearest_frame(self, frame: float) -> int:
+        """The frame whose `shown` row applies at a fractional frame index (halves round up)."""
+        return min(max(int(np.floor(float(frame) + 0.5)), 0), self.num_frames - 1)
+
     def drawn(self, frame: float) -> np.ndarray | None:
         """[N] bool: the Gaussians drawn at a fractional frame index (every bound node shown at the
         nearest frame; unbound ones always), or None when every Gaussian is drawn at every frame."""
         if self.shown is None:
             return None
-        f = min(max(int(np.floor(float(frame) + 0.5)), 0), self.num_frames - 1)
-        shown = self.shown[f]
+        shown = self.shown[self.nearest_frame(frame)]
         if shown.all():
             return None
         rows, nodes = self._bindings()

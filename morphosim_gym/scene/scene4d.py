@@ -280,7 +280,7 @@ class Scene4D:
         """Which rows are drawn at the frame nearest `frame` (`mask`, `rows`) and their opacities for
         `at` (0 where not drawn), kept for the last `POSE_CACHE_SIZE` frames asked (None when every
         Gaussian is drawn); `drawn_at` adds the drawn rows' arrays."""
-        key = min(max(int(np.floor(frame + 0.5)), 0), self.motion.num_frames - 1)
+        key = self.motion.nearest_frame(frame)
         with self._poses_lock:
             if key in self._shown:
                 self._shown.move_to_end(key)
@@ -320,10 +320,9 @@ class Scene4D:
         cam = self.camera_at(t)
         g = self.at(t)
         drawn = self.drawn(t)
-        if drawn is not None:
-            g = g.subset(drawn)
-        fg = np.isin(g.object_ids, [o.id for o in self.objects if o.role != "background"])
-        pts = g.means[fg] if fg.any() else g.means
+        shown = np.ones(len(g), bool) if drawn is None else drawn
+        fg = np.isin(g.object_ids, [o.id for o in self.objects if o.role != "background"]) & shown
+        pts = g.means[fg] if fg.any() else g.means[shown]
         if len(pts) == 0:
             return cam.position + cam.forward
         depth = float(np.median((pts - cam.position) @ cam.forward)) if not fg.any() else \
@@ -368,10 +367,15 @@ class Scene4D:
         sel = g.object_ids == obj.id
         if not np.any(sel):
             raise ValueError(f"Expected Gaussians for object {obj.name!r}, found none")
+        return self.rows_center(np.flatnonzero(sel), t)
+
+    def rows_center(self, rows: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """[3] mean position at time t of the Gaussians `rows` that are drawn then (all of them
+        when none is): an object's centre, an env's target."""
         drawn = self.drawn(t)
-        if drawn is not None and np.any(sel & drawn):
-            sel &= drawn
-        return g.means[sel].mean(axis=0).astype(np.float64)
+        if drawn is not None and drawn[rows].any():
+            rows = rows[drawn[rows]]
+        return self.at(t).means[rows].mean(axis=0, dtype=np.float64)
 
     # ------------------------------------------------------------ editing
     @property
