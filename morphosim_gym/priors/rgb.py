@@ -14,6 +14,7 @@ from .colour_refine import refine_by_colour
 from .masks import _box_masks, label_regions, motion_foreground, planned_boxes, static_regions, still_camera
 from .protocol import BoxTrack
 from .sizes import ObjectSize, size_depth
+from .skyline import horizon_rows, sky_region
 from .tracks import flow_tracks
 
 __all__ = ["SETTING_ID", "RGBPriorEstimators", "object_depths"]
@@ -26,15 +27,19 @@ class RGBPriorEstimators:
     """Priors from the frames and cameras alone.
 
     - masks: moving regions (`masks.motion_foreground`) labelled with the plan's moving objects
-      (`masks.label_regions`); the other pixels are the setting (id 0, label `setting_label`;
-      above the horizon only with `backdrop`, else -1). Attention maps are not used. The still
+      (`masks.label_regions`); the other pixels are the setting (id 0, label `setting_label`),
+      except the sky (-1). With `backdrop` there is no sky; without it, the sky is what
+      `skyline.sky_region` reads from each frame's colours (`skyline`: a setting's ground
+      that ends short of the horizon, hills that rise above it), or above the ground plane's
+      horizon where colour cannot tell or `skyline` is False. Attention maps are not used. The still
       objects the plan names (`static_labels`: `masks.static_plan_labels`) are the regions of the
       setting that stand out from it in colour (`masks.static_regions`); other still things
       join the setting. With a plan (`targets`), each object's mask is then corrected by its own
       colours over the clip (`colour_refine.refine_by_colour`; `colour_refine=False` skips it).
       Without one (a video: every moving region is one "object", a crowd of many colours) it is
       not: on the two real videos of `benchmarks/video.py` it cost 0.3-0.6 dB on held-out frames.
-    - depth: the ground plane z = `ground_height` for the setting; each object region gets the
+    - depth: the ground plane z = `ground_height` for the setting (the setting above the horizon:
+      a backdrop as far as the farthest ground seen; the sky: 0); each object region gets the
       ground depth where its lowest pixels meet the ground (objects stand on the ground), or,
       given its real size (`sizes`, by label: `sizes.planned_sizes`), the depth at which
       something that tall covers its rows when it swims or flies, touches no ground, or is
@@ -62,6 +67,7 @@ class RGBPriorEstimators:
             whose frames show no ground near enough to tell from the sky): every pixel outside
             the objects is left unknown (depth 0, mask -1), and objects take their size depth.
         colour_refine: correct a planned clip's object masks by colour (see masks above).
+        skyline: without `backdrop`, tell the sky from the setting by colour (see masks above).
     """
 
     ground_height: float = 0.0
@@ -75,6 +81,7 @@ class RGBPriorEstimators:
     contact_percentile: float = 10.0
     ground: bool = True
     colour_refine: bool = True
+    skyline: bool = True
 
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
@@ -96,6 +103,11 @@ class RGBPriorEstimators:
             out = np.where(out > 0, out, far).astype(np.float32)
         if masks is None:
             return out
+        if self.ground and not self.backdrop:
+            # the setting above the horizon (hills) is a backdrop; the sky (-1) is nothing at all
+            far = float(out.max()) if np.any(out > 0) else self.max_depth
+            out = np.where((masks == SETTING_ID) & (out <= 0), far, out)
+            out = np.where(masks < 0, 0.0, out).astype(np.float32)
         valid = out[out > 0]
         fallback = float(np.median(valid)) if valid.size else 1.0
         ground = out.copy()
@@ -122,8 +134,8 @@ class RGBPriorEstimators:
         if not self.ground:
             below = np.zeros((t, h, w), bool)
         elif cameras is not None and not self.backdrop:
-            below = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) > 0
-                              for c in self._cameras(cameras, t)])
+            below = np.stack([self._not_sky(f[i], ids[i] > 0, c)
+                              for i, c in enumerate(self._cameras(cameras, t))])
         else:
             below = np.ones((t, h, w), bool)
         setting = (ids == 0) & below
@@ -158,6 +170,12 @@ class RGBPriorEstimators:
             labels = {SETTING_ID: self.setting_label, **labels}
         present = set(np.unique(ids).tolist())
         return ids, {k: v for k, v in labels.items() if k in present}
+
+    def _not_sky(self, frame: np.ndarray, objects: np.ndarray, camera: Camera) -> np.ndarray:
+        """[H, W] bool: where one frame shows something (the setting or an object), not the sky."""
+        below = ground_plane_depth(camera, self.ground_height, self.max_depth) > 0
+        sky = sky_region(frame, objects, horizon_rows(below)) if self.skyline else None
+        return below if sky is None else ~sky
 
     def tracks(self, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return flow_tracks(frames, self.track_spacing, self.fb_threshold)
