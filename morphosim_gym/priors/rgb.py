@@ -101,17 +101,15 @@ class RGBPriorEstimators:
         t = len(frames)
         cams = self._cameras(camera, t)
         out = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) for c in cams])
+        far = float(out.max()) if np.any(out > 0) else self.max_depth     # a backdrop: the farthest ground seen
         if not self.ground:
             out = np.zeros_like(out)
         elif self.backdrop:
-            # above the horizon: a backdrop as far as the farthest ground seen
-            far = float(out.max()) if np.any(out > 0) else self.max_depth
-            out = np.where(out > 0, out, far).astype(np.float32)
+            out = np.where(out > 0, out, far).astype(np.float32)          # everything above the horizon
         if masks is None:
             return out
         if self.ground and not self.backdrop:
             # the setting above the horizon (hills) is a backdrop; the sky (-1) is nothing at all
-            far = float(out.max()) if np.any(out > 0) else self.max_depth
             out = np.where((masks == SETTING_ID) & (out <= 0), far, out)
             out = np.where(masks < 0, 0.0, out).astype(np.float32)
         valid = out[out > 0]
@@ -138,13 +136,13 @@ class RGBPriorEstimators:
         ids, labels = label_regions(fg, targets, self.box_margin, frames=f)
         ids = ids.copy()
         if not self.ground:
-            below = np.zeros((t, h, w), bool)
+            not_sky = np.zeros((t, h, w), bool)
         elif cameras is not None and not self.backdrop:
-            below = np.stack([self._not_sky(f[i], ids[i] > 0, c)
-                              for i, c in enumerate(self._cameras(cameras, t))])
+            not_sky = np.stack([self._not_sky(f[i], ids[i] > 0, c)
+                                for i, c in enumerate(self._cameras(cameras, t))])
         else:
-            below = np.ones((t, h, w), bool)
-        setting = (ids == 0) & below
+            not_sky = np.ones((t, h, w), bool)
+        setting = (ids == 0) & not_sky
         if static_labels:
             # the still objects the plan names: what stands out from the setting in colour (one
             # label: every such region; several: the largest regions, one label each)

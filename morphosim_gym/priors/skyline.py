@@ -103,11 +103,11 @@ def sky_region(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, seed
     free = ~objects
     hz = np.clip(horizon, 0, h)
     ground_top = hz + np.ceil((1.0 - ground_rows) * (h - hz)).astype(np.int64)          # [W]
-    setting_seed = free & (rows >= ground_top[None, :]) & (rows >= hz[None, :])
+    setting_seed = free & (rows >= ground_top[None, :])
     sky_seed = free & (rows < max(1, int(round(seed_rows * h)))) & (rows < hz[None, :])
     if sky_seed.sum() < min_seed or setting_seed.sum() < min_seed:
         return None
-    cap = np.where(ground_top < h, ground_top, h)
+    cap = np.minimum(ground_top, h)                     # the seam stays above the setting's seed
     sky_m, set_m = _model(feat[sky_seed]), _model(feat[setting_seed])
     sky = np.zeros((h, w), bool)
     for _ in range(iters):
