@@ -9,13 +9,13 @@ For each prompt: generate the clip, estimate its masks from the frames alone
 estimated mask against the generator's mask of the same name (IoU, mean over the frames where the
 object shows at least 4 pixels). Seconds to run, not minutes: the quick check before a full
 `benchmarks/reconstruct.py --priors estimated` run, whose instance IoU follows these masks.
-`--compare colour_refine` also scores the masks with `RGBPriorEstimators(colour_refine=False)`.
+`--compare STAGE` also scores the masks with that stage of `RGBPriorEstimators` switched off
+(`colour_refine`, `skyline`, `rims`, `motion_split`).
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
 from pathlib import Path
 
@@ -25,16 +25,7 @@ import morphosim_gym as ms
 from _bars import write_json
 from morphosim_gym.generate.examples import EXAMPLE_PROMPTS
 from morphosim_gym.metrics import iou
-from morphosim_gym.priors import prepare_priors
-from morphosim_gym.priors.prepare import GROUNDLESS_SETTINGS, open_sky, setting_label, setting_word
-from morphosim_gym.priors.rgb import RGBPriorEstimators
-
-
-def estimators(clip: ms.GeneratedClip, **overrides) -> RGBPriorEstimators:
-    """The estimators `prepare_priors` builds for this clip, with `overrides`."""
-    est = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=not open_sky(clip),
-                             ground=setting_word(clip) not in GROUNDLESS_SETTINGS)
-    return dataclasses.replace(est, **overrides)
+from morphosim_gym.priors import default_estimators, prepare_priors
 
 
 def mask_ious(clip: ms.GeneratedClip, est: ms.GeneratedClip) -> dict[str, float]:
@@ -57,7 +48,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=49)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--prompts-file", type=Path, default=None)
-    ap.add_argument("--compare", choices=("colour_refine",), default=None,
+    ap.add_argument("--compare", choices=("colour_refine", "skyline", "rims", "motion_split"), default=None,
                     help="also score the estimators with this stage switched off")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
@@ -76,7 +67,7 @@ def main() -> None:
         scores, seconds = {}, {}
         for name, overrides in variants.items():
             start = time.perf_counter()
-            est = prepare_priors(clip, "estimated", estimators=estimators(clip, **overrides))
+            est = prepare_priors(clip, "estimated", estimators=default_estimators(clip, **overrides))
             seconds[name] = time.perf_counter() - start
             scores[name] = mask_ious(clip, est)
         for obj in scores["default"]:

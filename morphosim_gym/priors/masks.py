@@ -26,7 +26,7 @@ from ..scene.camera import Camera
 from .depth import ground_plane_depth
 from .protocol import BoxTrack, PlanTarget
 
-__all__ = ["box_contrast", "label_regions", "motion_foreground", "plan_targets", "planned_boxes", "static_plan_labels",
+__all__ = ["box_contrast", "box_masks", "label_regions", "motion_foreground", "plan_targets", "planned_boxes", "static_plan_labels",
            "static_regions", "still_camera"]
 
 
@@ -53,7 +53,8 @@ def plan_targets(info: dict[str, Any], num_frames: int, width: int, height: int)
     return out
 
 
-def _box_masks(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: float) -> list[np.ndarray]:
+def box_masks(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: float) -> list[np.ndarray]:
+    """[H, W] bool per target: inside its frame-`t` box grown by `margin` of its size on each side."""
     out = []
     for tg in targets:
         x0, y0, x1, y1 = np.asarray(tg.boxes[t], np.float64)
@@ -68,7 +69,7 @@ def _box_masks(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: floa
 
 def planned_boxes(targets: Sequence[BoxTrack], t: int, h: int, w: int, margin: float) -> np.ndarray:
     """[t, H, W] bool: inside any planned box (grown by `margin`) in each of the first t frames."""
-    return np.stack([np.any(_box_masks(targets, i, h, w, margin), axis=0) if targets else np.zeros((h, w), bool)
+    return np.stack([np.any(box_masks(targets, i, h, w, margin), axis=0) if targets else np.zeros((h, w), bool)
                      for i in range(t)])
 
 
@@ -158,8 +159,8 @@ def label_regions(foreground: np.ndarray, targets: Sequence[BoxTrack], box_margi
     bottoms = np.array([np.asarray(tg.boxes, np.float64)[:, 3] for tg in targets])     # [K, T]
     for i in range(t):
         n, lab = cv2.connectedComponents(foreground[i].astype(np.uint8), connectivity=8)
-        boxes = _box_masks(targets, i, h, w, box_margin)
-        tight = _box_masks(targets, i, h, w, 0.0)
+        boxes = box_masks(targets, i, h, w, box_margin)
+        tight = box_masks(targets, i, h, w, 0.0)
         for c in range(1, n):
             comp = lab == c
             cover = np.array([float((comp & b).sum()) / float(comp.sum()) for b in boxes])

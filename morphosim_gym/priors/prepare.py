@@ -13,7 +13,7 @@ from .protocol import PriorEstimators
 from .rgb import RGBPriorEstimators
 from .sizes import planned_sizes
 
-__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "GROUNDLESS_SETTINGS", "prepare_priors", "setting_label",
+__all__ = ["PRIOR_NAMES", "PRIOR_SOURCES", "CLOSED_SETTINGS", "GROUNDLESS_SETTINGS", "default_estimators", "prepare_priors", "setting_label",
            "open_sky", "setting_word"]
 
 PRIOR_NAMES = ("depth", "masks", "tracks")
@@ -72,6 +72,14 @@ def _accepted(method: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in kwargs.items() if k in params}
 
 
+def default_estimators(clip: GeneratedClip, **overrides: Any) -> RGBPriorEstimators:
+    """The `RGBPriorEstimators` `prepare_priors` uses for `clip` (its setting's label, a backdrop
+    unless the sky is open, no ground for a scene up in the sky), with `overrides` of its fields."""
+    est = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=not open_sky(clip),
+                             ground=setting_word(clip) not in GROUNDLESS_SETTINGS)
+    return replace(est, **overrides) if overrides else est
+
+
 def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorEstimators | None = None) -> GeneratedClip:
     """A copy of `clip` whose depth, masks and tracks come from `source`:
 
@@ -94,9 +102,7 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
     estimate = {n: source == "estimated" or not have[n] for n in PRIOR_NAMES}
     if not any(estimate.values()):
         return replace(clip, info={**clip.info, "priors": {n: _carried(clip, n) for n in PRIOR_NAMES}})
-    est = estimators if estimators is not None else RGBPriorEstimators(
-        setting_label=setting_label(clip), backdrop=not open_sky(clip),
-        ground=setting_word(clip) not in GROUNDLESS_SETTINGS)
+    est = estimators if estimators is not None else default_estimators(clip)
     fields: dict[str, Any] = {}
     masks, labels = clip.masks, dict(clip.labels)
     if estimate["masks"]:

@@ -11,7 +11,8 @@ import numpy as np
 from ..scene.camera import Camera
 from .depth import contact_depth, ground_plane_depth
 from .colour_refine import refine_by_colour
-from .masks import _box_masks, label_regions, motion_foreground, planned_boxes, static_regions, still_camera
+from .masks import box_masks, label_regions, motion_foreground, planned_boxes, static_regions, still_camera
+from .overlaps import split_by_motion
 from .protocol import BoxTrack
 from .rims import trim_rims
 from .sizes import ObjectSize, size_depth
@@ -39,6 +40,10 @@ class RGBPriorEstimators:
       colours over the clip (`colour_refine.refine_by_colour`; `colour_refine=False` skips it).
       Without one (a video: every moving region is one "object", a crowd of many colours) it is
       not: on the two real videos of `benchmarks/video.py` it cost 0.3-0.6 dB on held-out frames.
+      Where two moving objects' boxes overlap, `label_regions` gave the pixels to the nearest box;
+      each now goes to the object whose box motion it follows (`overlaps.split_by_motion`; after
+      the colour correction: before it, two 96-px sheep came out worse, IoU 0.68 -> 0.43;
+      `motion_split=False` skips it).
       Last, with a plan, each moving object's outline against the setting is trimmed to the
       pixels it covers at least half of (`rims.trim_rims`; `rims=False` skips it): masks from
       motion take every pixel the object touches, a rim of setting 1 px wide.
@@ -73,6 +78,7 @@ class RGBPriorEstimators:
         colour_refine: correct a planned clip's object masks by colour (see masks above).
         skyline: without `backdrop`, tell the sky from the setting by colour (see masks above).
         rims: trim a planned clip's moving objects' outlines (see masks above).
+        motion_split: share out overlapping moving objects by their motion (see masks above).
     """
 
     ground_height: float = 0.0
@@ -88,6 +94,7 @@ class RGBPriorEstimators:
     colour_refine: bool = True
     skyline: bool = True
     rims: bool = True
+    motion_split: bool = True
 
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
@@ -149,7 +156,7 @@ class RGBPriorEstimators:
             first = len(targets) + 1
             for i in range(t):
                 # not inside a moving object's planned box: what the motion test missed of it
-                boxed = np.any(_box_masks(targets, i, h, w, 0.0), axis=0) if targets else np.zeros((h, w), bool)
+                boxed = np.any(box_masks(targets, i, h, w, 0.0), axis=0) if targets else np.zeros((h, w), bool)
                 odd = static_regions(f[i], setting[i]) & ~boxed
                 n, lab, stats, _ = cv2.connectedComponentsWithStats(odd.astype(np.uint8), connectivity=8)
                 order = np.argsort(-stats[1:, cv2.CC_STAT_AREA]) + 1
@@ -170,6 +177,8 @@ class RGBPriorEstimators:
                 boxed = planned_boxes(targets, t, h, w, self.box_margin)     # the background model's boxes
                 still = ~fg & ((~boxed).sum(axis=0) >= max(1, 0.2 * t))[None]
             ids = refine_by_colour(f, ids, SETTING_ID, movers=range(1, len(targets) + 1), still=still)
+        if self.motion_split and len(targets) > 1:
+            ids = split_by_motion(f, ids, targets, self.box_margin)
         if self.rims and targets and setting.any():
             ids = np.stack([trim_rims(f[i], ids[i], range(1, len(targets) + 1), SETTING_ID) for i in range(t)])
         if setting.any():

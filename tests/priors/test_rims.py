@@ -1,15 +1,11 @@
 """Object masks trimmed to the pixels the object covers most of."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-import morphosim_gym as ms
-from morphosim_gym.priors import prepare_priors
-from morphosim_gym.priors.prepare import open_sky, setting_label
-from morphosim_gym.priors.rgb import RGBPriorEstimators
 from morphosim_gym.priors.rims import trim_rims
+
+from ._stages import with_and_without
 
 OBJ, SET = np.array([200.0, 40.0, 40.0]), np.array([110.0, 110.0, 100.0])
 
@@ -52,17 +48,13 @@ def test_bad_shapes_name_the_problem():
 
 
 def test_estimated_masks_of_a_generated_clip_lose_their_rim():
-    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=64, height=64, num_frames=9))
-    clip = sim.generate_clip("A car is moving from right to left through a serene sunlit meadow", 0)
-    est = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=not open_sky(clip))
-    assert est.rims                                            # on by default
+    clip, on, off = with_and_without("A car is moving from right to left through a serene sunlit meadow", "rims")
 
-    def precision_recall(rims):
-        out = prepare_priors(clip, "estimated", estimators=dataclasses.replace(est, rims=rims))
+    def precision_recall(out):
         k = next(i for i, n in out.labels.items() if n == "car")
         gt = np.isin(clip.masks, [i for i, n in clip.labels.items() if n == "car"])
         got = out.masks == k
         return (gt & got).sum() / got.sum(), (gt & got).sum() / gt.sum()
 
-    (p0, r0), (p1, r1) = precision_recall(False), precision_recall(True)
+    (p0, r0), (p1, r1) = precision_recall(off), precision_recall(on)
     assert p1 > p0 + 0.02 and r1 > 0.93, (p0, r0, p1, r1)

@@ -1,0 +1,16 @@
+"""A generated clip's estimated priors with one stage of the default estimators on and off."""
+
+import dataclasses
+
+import morphosim_gym as ms
+from morphosim_gym.priors import default_estimators, prepare_priors
+
+
+def with_and_without(prompt: str, stage: str, size: int = 64, frames: int = 9):
+    """(clip, its estimated priors with `stage` on, with it off); asserts the stage is on by default."""
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=size, height=size, num_frames=frames))
+    clip = sim.generate_clip(prompt, 0)
+    est = default_estimators(clip)
+    assert getattr(est, stage), f"{stage} is not on by default"
+    off = dataclasses.replace(est, **{stage: False})
+    return clip, prepare_priors(clip, "estimated", estimators=est), prepare_priors(clip, "estimated", estimators=off)
