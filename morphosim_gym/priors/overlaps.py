@@ -71,12 +71,12 @@ def _warp_error(frames: np.ndarray, t: int, warps: dict[int, np.ndarray], patch:
     return np.median(errs, axis=0) if errs else np.full(frames.shape[1:3], np.inf, np.float32)
 
 
-def _parting(a: dict[int, np.ndarray], b: dict[int, np.ndarray]) -> np.ndarray:
+def _parting(a: dict[int, np.ndarray], b: dict[int, np.ndarray], shape: tuple[int, int]) -> np.ndarray:
     """[H, W] the most, over the shared offsets, that two warps take each pixel apart (0 when they
-    share none)."""
+    share none: a clip too short for the offsets, or an empty box)."""
     shared = [o for o in a if o in b]
     if not shared:
-        return np.zeros(next(iter(a.values()), np.zeros((1, 1, 2))).shape[:2])
+        return np.zeros(shape)
     return np.max([np.linalg.norm(a[o] - b[o], axis=-1) for o in shared], axis=0)
 
 
@@ -117,7 +117,7 @@ def split_by_motion(frames: np.ndarray, ids: np.ndarray, targets: Sequence[BoxTr
             for b in cand[i + 1:]:
                 pair = ((best == a) & (second == b)) | ((best == b) & (second == a))
                 if (pair & contested).any():
-                    apart[pair] = _parting(warps[a], warps[b])[pair]
+                    apart[pair] = _parting(warps[a], warps[b], (h, w))[pair]
         decisive = np.isfinite(e_second) & (e_best < ratio * e_second) & (apart >= min_parting)
         # only ever away from a nearer object (its box bottom lower): label_regions gave the overlap
         # to the nearest, and a pixel of a farther object that the nearer one covers a few frames

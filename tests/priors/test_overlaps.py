@@ -98,6 +98,14 @@ def test_one_target_or_no_overlap_changes_nothing():
     assert np.array_equal(split_by_motion(frames, ids, [targets[0], far], box_margin=0.0), ids)
 
 
+@pytest.mark.parametrize("frames", [1, 3])
+def test_a_clip_too_short_for_the_offsets_keeps_its_labels(frames):
+    clip, truth, targets = _clip()
+    ids = _nearest_box_ids(truth, targets)[:frames]
+    short = [PlanTarget(tg.label, tg.boxes[:frames]) for tg in targets]
+    assert np.array_equal(split_by_motion(clip[:frames], ids, short, box_margin=0.0), ids)
+
+
 def test_bad_input_names_the_problem():
     frames, truth, targets = _clip()
     with pytest.raises(ValueError, match="ids"):
