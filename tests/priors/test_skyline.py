@@ -1,14 +1,12 @@
 """The sky told from the setting by colour: a ground that ends short of the horizon, hills above it."""
 
-import dataclasses
 
 import numpy as np
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.priors import prepare_priors
+from morphosim_gym.priors import default_estimators, prepare_priors
 from morphosim_gym.priors.prepare import open_sky, setting_label
-from morphosim_gym.priors.rgb import RGBPriorEstimators
 from morphosim_gym.priors.skyline import horizon_rows, sky_region
 
 H, W = 64, 64
@@ -90,8 +88,6 @@ def test_a_generated_ground_that_ends_leaves_the_sky_unlabelled_and_without_dept
     precision, recall = _setting_scores(clip, est)
     assert precision > 0.95 and recall > 0.95, (precision, recall)
     assert np.all(est.depth[est.masks < 0] == 0) and np.all(est.depth[est.masks == 0] > 0)
-    horizon = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=False, skyline=False)
-    old = prepare_priors(clip, "estimated", estimators=horizon)
+    old = prepare_priors(clip, "estimated", estimators=default_estimators(clip, skyline=False))
     assert _setting_scores(clip, old)[0] < 0.9      # the ground plane's horizon takes sky for ground
-    assert dataclasses.replace(horizon, skyline=True) == RGBPriorEstimators(
-        setting_label=setting_label(clip), backdrop=False)      # on by default
+    assert default_estimators(clip).skyline         # on by default

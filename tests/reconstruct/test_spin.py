@@ -177,8 +177,7 @@ def test_a_sliding_mug_is_not_spun_by_a_rotation_that_explains_nothing():
     than no turn does; the gain gate keeps it unturned. (With the trimmed outline of the default
     estimators ECC finds no turn here at all.)"""
     from morphosim_gym.generate.real_assets import asset_candidates
-    from morphosim_gym.priors import RGBPriorEstimators, prepare_priors
-    from morphosim_gym.priors.prepare import setting_label
+    from morphosim_gym.priors import default_estimators, prepare_priors
     from morphosim_gym.reconstruct.initialize import _decide_motion
 
     with pytest.MonkeyPatch.context() as mp:
@@ -188,7 +187,7 @@ def test_a_sliding_mug_is_not_spun_by_a_rotation_that_explains_nothing():
         sim = ms.MorphoSim(generation=ms.GenerationConfig(width=128, height=128, num_frames=49),
                            reconstruction="oracle")
         clip = sim.generate_clip("a blue mug slides slowly across the table from left to right", seed=0)
-    est = prepare_priors(clip, "estimated", estimators=RGBPriorEstimators(setting_label=setting_label(clip), rims=False))
+    est = prepare_priors(clip, "estimated", estimators=default_estimators(clip, rims=False))
     mug = next(i for i, n in est.labels.items() if n == "mug")
     ref = est.num_frames // 2
 
