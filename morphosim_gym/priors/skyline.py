@@ -20,6 +20,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..metrics.image import rgb_to_lab
+
 __all__ = ["horizon_rows", "sky_region"]
 
 def horizon_rows(below: np.ndarray) -> np.ndarray:
@@ -31,10 +33,10 @@ def horizon_rows(below: np.ndarray) -> np.ndarray:
 
 
 def _lab(frame: np.ndarray) -> np.ndarray:
+    """[H, W, 3] float32 CIE Lab of the frame blurred a little against texture."""
     f = np.asarray(frame)
     f = f.astype(np.float32) / 255.0 if f.dtype == np.uint8 else f.astype(np.float32)
-    f = cv2.GaussianBlur(np.ascontiguousarray(f), (3, 3), 0)
-    return cv2.cvtColor(f, cv2.COLOR_RGB2LAB)
+    return rgb_to_lab(cv2.GaussianBlur(np.ascontiguousarray(f), (3, 3), 0)).astype(np.float32)
 
 
 _BINS = 16
