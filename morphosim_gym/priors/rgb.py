@@ -58,6 +58,13 @@ class RGBPriorEstimators:
     Attributes:
         ground_height: world z of the ground plane (metres).
         max_depth: ground farther than this is unknown (0).
+        far_heights: with a value, the ground is seen as far as this many times the camera's
+            height above it (camera depth) instead of `max_depth`: farther rows are the
+            setting's backdrop, as far as the farthest ground left, where the masks say setting
+            (`depth`), and the sky where they do not. A fixed cap does
+            not follow the scene's scale: 50 m is 6 heights of the bus's camera (8.1 m up; its
+            far road, up to hedges 74 m away, became a wall at 48.6 m) and 227 of a table-top
+            camera's. None: `max_depth`.
         track_spacing: pixel spacing of the tracked point grid.
         fb_threshold: forward-backward check tolerance in pixels.
         box_margin: planned boxes grow by this fraction of their size before labelling.
@@ -83,6 +90,7 @@ class RGBPriorEstimators:
 
     ground_height: float = 0.0
     max_depth: float = 50.0
+    far_heights: float | None = None
     track_spacing: int = 4
     fb_threshold: float = 1.0
     box_margin: float = 0.25
@@ -96,6 +104,14 @@ class RGBPriorEstimators:
     rims: bool = True
     motion_split: bool = True
 
+    def _ground(self, camera: Camera) -> np.ndarray:
+        """[H, W] camera depth of the ground plane as far as it is taken to be seen (`max_depth`,
+        `far_heights`), 0 beyond."""
+        reach = self.max_depth
+        if self.far_heights is not None:
+            reach = self.far_heights * max(float(camera.position[2]) - self.ground_height, 0.0)
+        return ground_plane_depth(camera, self.ground_height, reach)
+
     def _cameras(self, camera: Camera | Sequence[Camera], t: int) -> list[Camera]:
         cams = [camera] * t if isinstance(camera, Camera) else list(camera)
         if len(cams) != t:
@@ -107,7 +123,7 @@ class RGBPriorEstimators:
               sizes: Mapping[str, ObjectSize] | None = None) -> np.ndarray:
         t = len(frames)
         cams = self._cameras(camera, t)
-        out = np.stack([ground_plane_depth(c, self.ground_height, self.max_depth) for c in cams])
+        out = np.stack([self._ground(c) for c in cams])
         far = float(out.max()) if np.any(out > 0) else self.max_depth     # a backdrop: the farthest ground seen
         if not self.ground:
             out = np.zeros_like(out)
@@ -188,7 +204,7 @@ class RGBPriorEstimators:
 
     def _not_sky(self, frame: np.ndarray, objects: np.ndarray, camera: Camera) -> np.ndarray:
         """[H, W] bool: where one frame shows something (the setting or an object), not the sky."""
-        below = ground_plane_depth(camera, self.ground_height, self.max_depth) > 0
+        below = self._ground(camera) > 0
         sky = sky_region(frame, objects, horizon_rows(below)) if self.skyline else None
         return below if sky is None else ~sky
 

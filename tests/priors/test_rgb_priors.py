@@ -205,3 +205,57 @@ def test_up_in_the_sky_everything_but_the_objects_is_sky():
     # on a road the lower rows are the setting, on the ground plane
     road = prepare_priors(GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0, info={**info, "setting": "road"}))
     assert np.all(road.masks[:, -5:][road.masks[:, -5:] != 1] == 0) and np.all(road.depth[:, -5:] > 0)
+
+
+def _plane_rows(cam, est):
+    """Per row of the middle column: the ground plane's depth (uncapped) and the estimate's."""
+    from morphosim_gym.priors import ground_plane_depth
+
+    frames = np.full((2, cam.height, cam.width, 3), 100, np.uint8)
+    return ground_plane_depth(cam, 0.0, 1e6)[:, cam.width // 2], est.depth(frames, cam)[0][:, cam.width // 2]
+
+
+@pytest.mark.parametrize("height", [0.2, 2.0, 8.0])
+def test_far_ground_ends_at_a_number_of_camera_heights_whatever_the_scale(height):
+    # the same view at three scales (a table top, a field, a road seen from high up)
+    s = height / 2.0
+    cam = Camera.look_at((0.0, -6.0 * s, height), (0.0, 0.0, 0.5 * s), width=64, height=48, fov_y_deg=50.0)
+    plane, z = _plane_rows(cam, RGBPriorEstimators(far_heights=4.0))
+    near, beyond = (plane > 0) & (plane <= 4.0 * height), plane > 4.0 * height
+    assert near.sum() >= 10 and beyond.sum() >= 3
+    np.testing.assert_allclose(z[near], plane[near], rtol=1e-5)       # the ground as it is
+    # farther rows: a backdrop as far as the farthest ground left, not the plane behind it
+    np.testing.assert_allclose(z[beyond], plane[near].max(), rtol=1e-5)
+    assert beyond.sum() == 13                                         # the same rows at every scale
+
+
+def test_without_far_heights_the_ground_reaches_max_depth():
+    cam = Camera.look_at((0.0, -6.0, 2.0), (0.0, 0.0, 0.5), width=64, height=48, fov_y_deg=50.0)
+    plane, z = _plane_rows(cam, RGBPriorEstimators(far_heights=None, max_depth=50.0))
+    seen = (plane > 0) & (plane <= 50.0)
+    assert np.count_nonzero(seen & (plane > 8.0)) >= 3
+    np.testing.assert_allclose(z[seen], plane[seen], rtol=1e-5)
+
+
+def test_under_an_open_sky_a_planned_clip_sees_the_ground_eight_camera_heights_far():
+    from morphosim_gym.priors import default_estimators
+    from morphosim_gym.priors.prepare import FAR_HEIGHTS
+
+    frames, boxes = _moving_square()
+    cam = Camera.look_at((0.0, -6.0, 2.0), (0.0, 0.0, 0.2), width=64, height=48, fov_y_deg=50.0)
+    trajectories = {"car": {"boxes": (boxes * [64, 48, 64, 48]).tolist()}}
+    depth, masks = {}, {}
+    for setting in ("road", "table"):
+        clip = GeneratedClip(frames=frames, cameras=(cam,) * 9, fps=8.0,
+                             info={"trajectories": trajectories, "setting": setting})
+        out = prepare_priors(clip)
+        depth[setting], masks[setting] = out.depth, out.masks
+        assert default_estimators(clip).far_heights == (FAR_HEIGHTS if setting == "road" else None)
+    assert depth["road"].max() <= FAR_HEIGHTS * 2.0 + 1e-3 and np.count_nonzero(depth["road"]) > 0
+    # flat colours cannot tell the sky from the setting: beyond the ground's reach is sky
+    from morphosim_gym.priors import ground_plane_depth
+
+    beyond = ground_plane_depth(cam, 0.0, 1e6) > FAR_HEIGHTS * 2.0
+    assert beyond.sum() >= 64 and np.all(masks["road"][:, beyond] == -1) and np.all(depth["road"][:, beyond] == 0)
+    # where walls close the view the floor reaches as far as it is seen (max_depth)
+    assert depth["table"].max() > FAR_HEIGHTS * 2.0 * 1.5
