@@ -104,6 +104,10 @@ class RGBPriorEstimators:
     rims: bool = True
     motion_split: bool = True
 
+    def __post_init__(self) -> None:
+        if self.far_heights is not None and not (np.isfinite(self.far_heights) and self.far_heights > 0):
+            raise ValueError(f"Expected far_heights > 0 or None, found {self.far_heights!r}")
+
     def _ground(self, camera: Camera) -> np.ndarray:
         """[H, W] camera depth of the ground plane as far as it is taken to be seen (`max_depth`,
         `far_heights`), 0 beyond."""

@@ -237,6 +237,12 @@ def test_without_far_heights_the_ground_reaches_max_depth():
     np.testing.assert_allclose(z[seen], plane[seen], rtol=1e-5)
 
 
+@pytest.mark.parametrize("bad", [0.0, -2.0, float("nan"), float("inf")])
+def test_a_bad_far_heights_is_named(bad):
+    with pytest.raises(ValueError, match="far_heights"):
+        RGBPriorEstimators(far_heights=bad)
+
+
 def test_under_an_open_sky_a_planned_clip_sees_the_ground_eight_camera_heights_far():
     from morphosim_gym.priors import default_estimators
     from morphosim_gym.priors.prepare import FAR_HEIGHTS
