@@ -61,10 +61,9 @@ class RGBPriorEstimators:
         far_heights: with a value, the ground is seen as far as this many times the camera's
             height above it (camera depth) instead of `max_depth`: farther rows are the
             setting's backdrop, as far as the farthest ground left, where the masks say setting
-            (`depth`), and the sky where they do not. A fixed cap does
-            not follow the scene's scale: 50 m is 6 heights of the bus's camera (8.1 m up; its
-            far road, up to hedges 74 m away, became a wall at 48.6 m) and 227 of a table-top
-            camera's. None: `max_depth`.
+            (`depth`), and the sky where they do not. A fixed cap does not follow the scene's
+            scale: 50 m is 6 heights of the bus's camera (8.1 m up; its far road, up to hedges
+            74 m away, became a wall at 48.6 m) and 227 of a table-top camera's. None: `max_depth`.
         track_spacing: pixel spacing of the tracked point grid.
         fb_threshold: forward-backward check tolerance in pixels.
         box_margin: planned boxes grow by this fraction of their size before labelling.

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from morphosim_gym.priors import PlanTarget, PriorEstimators, RGBPriorEstimators, prepare_priors
+from morphosim_gym.priors import (PlanTarget, PriorEstimators, RGBPriorEstimators, default_estimators, ground_plane_depth,
+                                  prepare_priors)
+from morphosim_gym.priors.prepare import FAR_HEIGHTS
 from morphosim_gym.scene import Camera, GeneratedClip
 
 
@@ -209,8 +211,6 @@ def test_up_in_the_sky_everything_but_the_objects_is_sky():
 
 def _plane_rows(cam, est):
     """Per row of the middle column: the ground plane's depth (uncapped) and the estimate's."""
-    from morphosim_gym.priors import ground_plane_depth
-
     frames = np.full((2, cam.height, cam.width, 3), 100, np.uint8)
     return ground_plane_depth(cam, 0.0, 1e6)[:, cam.width // 2], est.depth(frames, cam)[0][:, cam.width // 2]
 
@@ -244,9 +244,6 @@ def test_a_bad_far_heights_is_named(bad):
 
 
 def test_under_an_open_sky_a_planned_clip_sees_the_ground_eight_camera_heights_far():
-    from morphosim_gym.priors import default_estimators
-    from morphosim_gym.priors.prepare import FAR_HEIGHTS
-
     frames, boxes = _moving_square()
     cam = Camera.look_at((0.0, -6.0, 2.0), (0.0, 0.0, 0.2), width=64, height=48, fov_y_deg=50.0)
     trajectories = {"car": {"boxes": (boxes * [64, 48, 64, 48]).tolist()}}
@@ -259,8 +256,6 @@ def test_under_an_open_sky_a_planned_clip_sees_the_ground_eight_camera_heights_f
         assert default_estimators(clip).far_heights == (FAR_HEIGHTS if setting == "road" else None)
     assert depth["road"].max() <= FAR_HEIGHTS * 2.0 + 1e-3 and np.count_nonzero(depth["road"]) > 0
     # flat colours cannot tell the sky from the setting: beyond the ground's reach is sky
-    from morphosim_gym.priors import ground_plane_depth
-
     beyond = ground_plane_depth(cam, 0.0, 1e6) > FAR_HEIGHTS * 2.0
     assert beyond.sum() >= 64 and np.all(masks["road"][:, beyond] == -1) and np.all(depth["road"][:, beyond] == 0)
     # where walls close the view the floor reaches as far as it is seen (max_depth)
