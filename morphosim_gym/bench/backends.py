@@ -9,6 +9,7 @@ records.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Iterable, Iterator, Optional
 
 from .episode import EpisodeKey, EpisodeResult, EpisodeRunner
@@ -84,6 +85,50 @@ def _ray() -> Any:
     return ray
 
 
+RAY_START_TRIES = 3
+_RAY_START_TIMEOUT = "timed out during startup"     # Ray's words when its raylet misses its fixed 30 s wait
+
+
+def _start_ray(ray: Any, tries: int = RAY_START_TRIES, **kw: Any) -> None:
+    """`ray.init(**kw)`, tried again when Ray's node times out during startup (a busy machine: its
+    raylet must register within a fixed 30 s). The processes a failed try started are ended before
+    the next; other errors are raised at once; the last timeout is raised naming the tries."""
+    import psutil
+
+    for attempt in range(1, tries + 1):
+        before = {p.pid for p in psutil.Process().children(recursive=True)}
+        try:
+            ray.init(**kw)
+            return
+        except Exception as err:
+            if _RAY_START_TIMEOUT not in str(err):
+                raise
+            _end_new_children(psutil, before)
+            if attempt == tries:
+                raise RuntimeError(f"Ray's local node timed out during startup {tries} times (a machine too "
+                                   "busy to start its raylet within 30 s); try again with fewer jobs running, "
+                                   "or use --backend local") from err
+            warnings.warn(f"Ray's local node timed out during startup (try {attempt} of {tries}); "
+                          "trying again", RuntimeWarning, stacklevel=2)
+
+
+def _end_new_children(psutil: Any, before: set[int]) -> None:
+    """Terminate (then kill) the child processes of this process that are not in `before`."""
+    new = [p for p in psutil.Process().children(recursive=True) if p.pid not in before]
+    for p in new:
+        try:
+            p.terminate()
+        except psutil.NoSuchProcess:
+            pass
+    _, alive = psutil.wait_procs(new, timeout=5)
+    for p in alive:
+        try:
+            p.kill()
+        except psutil.NoSuchProcess:
+            pass
+    psutil.wait_procs(alive, timeout=5)
+
+
 def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[str], workers: int,
                   address: Optional[str], grounding: Optional[str]) -> Iterator[EpisodeResult]:
     ray = _ray()
@@ -91,7 +136,7 @@ def _ray_episodes(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Op
     if not ray.is_initialized():
         # "local": our own cluster, even where RAY_ADDRESS or a stale `ray start` file names another.
         kw: dict[str, Any] = {"address": address} if address else {"address": "local", "num_cpus": max(workers, 1)}
-        ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False, **kw)
+        _start_ray(ray, include_dashboard=False, log_to_driver=False, configure_logging=False, **kw)
         started = True
     try:
         yield from _ray_run(ray, suite, seeds, jobs, cache_dir, workers, grounding)
