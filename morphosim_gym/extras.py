@@ -36,7 +36,7 @@ class Extra:
 
 
 EXTRAS: dict[str, Extra] = {
-    "bench": Extra("bench", ("ray", "matplotlib", "brisque", "libsvm", "skimage", "pyinstrument")),
+    "bench": Extra("bench", ("ray", "psutil", "matplotlib", "brisque", "libsvm", "skimage", "pyinstrument")),
     "viewer": Extra("viewer", ("viser",)),
     "diffusion": Extra("diffusion", ("diffusers", "transformers", "sentencepiece", "google.protobuf")),
     "train": Extra("train", ("stable_baselines3",)),

@@ -180,11 +180,12 @@ def test_bench_without_matplotlib_stops_before_any_episode(tmp_path):
     assert not out.exists() and not (tmp_path / "cache").exists(), "an episode ran"
 
 
-def test_bench_on_ray_without_ray_stops_before_any_episode(tmp_path):
+@pytest.mark.parametrize("command,module", [("bench", "ray"), ("bench", "psutil"), ("collect", "psutil")])
+def test_ray_backend_without_its_packages_stops_before_any_episode(tmp_path, command, module):
     out = tmp_path / "smoke"
-    code, stdout, err, _ = morphosim("bench", "smoke", "--backend", "ray", "--out", str(out), "--no-progress",
-                                     "--cache-dir", str(tmp_path / "cache"), blocked=("ray",))
-    _assert_missing_extra(code, stdout, err, "bench", "ray")
+    code, stdout, err, _ = morphosim(command, "smoke", "--backend", "ray", "--out", str(out), "--no-progress",
+                                     "--cache-dir", str(tmp_path / "cache"), blocked=(module,))
+    _assert_missing_extra(code, stdout, err, "bench", module)
     assert not out.exists() and not (tmp_path / "cache").exists(), "an episode ran"
 
 

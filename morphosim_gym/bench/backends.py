@@ -77,11 +77,12 @@ def _local(suite: Suite, seeds: list[int], jobs: list[Job], cache_dir: Optional[
 
 # ------------------------------------------------------------------------ ray
 def _ray() -> Any:
-    try:
-        import ray
-    except ImportError:
-        raise ValueError("Expected the ray package for --backend ray, found it missing; "
-                         "pip install -e '.[bench]'") from None
+    """The ray module, once the extra's packages it needs here (ray, psutil) are found installed."""
+    from morphosim_gym.extras import require_extra
+
+    require_extra("bench", "ray", "psutil", needed_for="--backend ray")
+    import ray
+
     return ray
 
 

@@ -96,7 +96,7 @@ def _bench(args: argparse.Namespace) -> int:
         raise ValueError(f"Expected --workers >= 1, found {args.workers}")
     require_extra("bench", "matplotlib", needed_for="morphosim bench (the report's plots)")   # before any episode
     if args.backend == "ray":
-        require_extra("bench", "ray", needed_for="morphosim bench --backend ray")
+        require_extra("bench", "ray", "psutil", needed_for="morphosim bench --backend ray")
     from .runner import run_sweep
 
     try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..extras import require_extra
 from ..policies import POLICY_SPEC_HELP
 from .cli import EXIT_NOT_RUN, exit_code
 from .dataset.video import VCODECS
@@ -64,6 +65,8 @@ def _collect(args: argparse.Namespace) -> int:
 
     if args.workers < 1:
         raise ValueError(f"Expected --workers >= 1, found {args.workers}")
+    if args.backend == "ray":                                        # before the dataset folder is made
+        require_extra("bench", "ray", "psutil", needed_for="morphosim collect --backend ray")
     try:
         suite = _suite(args)
         video = VideoSettings(vcodec=args.vcodec, crf=args.crf, g=args.gop)
