@@ -15,7 +15,7 @@ from .masks import box_masks, label_regions, motion_foreground, planned_boxes, s
 from .overlaps import split_by_motion
 from .protocol import BoxTrack
 from .rims import trim_rims
-from .sizes import ObjectSize, size_depth
+from .sizes import ObjectSize, pixel_rows, size_depth
 from .skyline import horizon_rows, sky_region
 from .tracks import flow_tracks
 
@@ -75,6 +75,11 @@ class RGBPriorEstimators:
             prior says is taken to be off the ground there (a bouncing ball in the air: the
             ground seen just under it lies behind it); its depth comes from its size
             (`object_depths`).
+        own_lift_ratio: before that, a planned ground object is measured against itself: where
+            its contact depth times its mask's pixel height is this many times its value on the
+            ground (5th percentile over the clip), it is off the ground, at that value over its
+            rows (`object_depths`; the football 128 px: contact up to 1.38 m where it flies at
+            0.74-0.79 m, a product 26.6-50.9 where the ground truth's stays 26.7-27.6). None: off.
         backdrop: pixels above the horizon are part of the setting, at the depth of the farthest
             ground seen (a backdrop: a generated frame draws something there); False leaves them
             unknown (depth 0, mask -1).
@@ -96,6 +101,7 @@ class RGBPriorEstimators:
     setting_label: str = "ground"
     backdrop: bool = True
     lifted_ratio: float = 1.35
+    own_lift_ratio: float | None = 1.15
     contact_percentile: float = 10.0
     ground: bool = True
     colour_refine: bool = True
@@ -106,6 +112,8 @@ class RGBPriorEstimators:
     def __post_init__(self) -> None:
         if self.far_heights is not None and not (np.isfinite(self.far_heights) and self.far_heights > 0):
             raise ValueError(f"Expected far_heights > 0 or None, found {self.far_heights!r}")
+        if self.own_lift_ratio is not None and not (np.isfinite(self.own_lift_ratio) and self.own_lift_ratio > 1):
+            raise ValueError(f"Expected own_lift_ratio > 1 or None, found {self.own_lift_ratio!r}")
 
     def _ground(self, camera: Camera) -> np.ndarray:
         """[H, W] camera depth of the ground plane as far as it is taken to be seen (`max_depth`,
@@ -147,7 +155,8 @@ class RGBPriorEstimators:
             size = (sizes or {}).get(_base_name((labels or {}).get(int(inst), "")))
             if size is not None and size.height < 0.2 * size.longest:
                 continue                # flat on the ground (a plate): the ground's own depth
-            z = object_depths(masks, int(inst), ground, cams, size, self.lifted_ratio, self.contact_percentile)
+            z = object_depths(masks, int(inst), ground, cams, size, self.lifted_ratio, self.contact_percentile,
+                              own_lift_ratio=self.own_lift_ratio)
             z = np.where(np.isfinite(z), z, fallback)
             for i in range(t):
                 out[i][masks[i] == inst] = z[i]
@@ -221,6 +230,20 @@ def _base_name(label: str) -> str:
     return head if head and tail.isdigit() else label
 
 
+def _lifted_by_own_scale(contact: np.ndarray, rows: np.ndarray, ratio: float, percentile: float = 5.0,
+                         min_frames: int = 3) -> np.ndarray:
+    """[T] contact depths with the frames where contact x rows exceeds `ratio` times its
+    `percentile` over the clip (the object on the ground) replaced by that value over the rows;
+    as given when under `min_frames` frames have both."""
+    scale = contact * rows
+    ok = np.isfinite(scale)
+    if ok.sum() < min_frames:
+        return contact
+    grounded = float(np.percentile(scale[ok], percentile))
+    lifted = ok & (scale > ratio * grounded)
+    return np.where(lifted, grounded / np.where(ok, rows, 1.0), contact)
+
+
 def _median_filter(z: np.ndarray, radius: int = 2) -> np.ndarray:
     """Running median over the finite entries of a [T] series (NaN stays where no entry is near)."""
     out = np.full_like(z, np.nan)
@@ -244,7 +267,8 @@ def _fill_gaps(z: np.ndarray, fallback: np.ndarray) -> np.ndarray:
 
 def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Sequence[Camera],
                   size: ObjectSize | None = None, lifted_ratio: float = 1.35,
-                  contact_percentile: float = 10.0, lift_rows: int = 8) -> np.ndarray:
+                  contact_percentile: float = 10.0, lift_rows: int = 8,
+                  own_lift_ratio: float | None = None) -> np.ndarray:
     """[T] camera depth of one object per frame (NaN where neither cue says anything): its ground
     contact (`contact_depth`) and, with its real `size`, the depth at which that height covers
     its mask's rows (`size_depth`, a running median over 5 frames against mask noise). Swimmers
@@ -252,10 +276,19 @@ def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Seq
     `lifted_ratio` times farther than the size says (off the ground there: the ground seen just
     under a thing in the air lies behind it; only for a mask of at least `lift_rows` rows, where
     a pixel of mask error moves the size depth by little). A swimmer's or flyer's frames without a
-    size depth take it interpolated from its other frames (`_fill_gaps`), not the contact."""
+    size depth take it interpolated from its other frames (`_fill_gaps`), not the contact.
+
+    With `own_lift_ratio` (and a `size`: a planned object), the object is first measured
+    against itself: its contact depth times its mask's pixel height (`pixel_rows`) stays the same
+    while it stands on the ground, wherever it goes; in a frame where that product is
+    `own_lift_ratio` times its value on the ground (the 5th percentile over the frames: a bouncing
+    ball touches the ground in a tenth of them), the
+    contact lies behind it (a bouncing ball in the air), and its depth is that value over its
+    rows there. (The category's size scale is the generator's, not necessarily the object's.)"""
     t = len(masks)
     contact = np.full(t, np.nan)
     by_size = np.full(t, np.nan)
+    rows = np.full(t, np.nan)       # pixel height where the whole object is seen
     tall = np.zeros(t, bool)        # enough rows that the size depth can overrule a contact
     for i in range(t):
         sel = masks[i] == inst
@@ -267,9 +300,13 @@ def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Seq
         if size is not None:
             z = size_depth(sel, cameras[i], size, blocked=others)
             by_size[i] = np.nan if z is None else z
+            n = pixel_rows(sel, lift_rows, blocked=others)
+            rows[i] = np.nan if n is None else n
             tall[i] = np.count_nonzero(sel.any(axis=1)) >= lift_rows
     if size is None:
         return contact
+    if own_lift_ratio is not None:
+        contact = _lifted_by_own_scale(contact, rows, own_lift_ratio)
     by_size = _median_filter(by_size)
     if size.mobility in ("swim", "air"):
         # no ground under a swimmer or a flyer: where its size says nothing (another object

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..scene.camera import Camera
 
-__all__ = ["CATEGORY_SIZES", "MIN_RELATIVE_SIZE", "ObjectSize", "planned_sizes", "size_depth"]
+__all__ = ["CATEGORY_SIZES", "MIN_RELATIVE_SIZE", "ObjectSize", "pixel_rows", "planned_sizes", "size_depth"]
 
 MIN_RELATIVE_SIZE = 0.3     # the generator's visibility floor (generate/compose.py)
 
@@ -99,9 +99,26 @@ def size_depth(mask: np.ndarray, camera: Camera, size: ObjectSize | float, min_r
     ignored). None when the mask is cut by the image border or, below or above it, by `blocked`
     [H, W] pixels (another object in front: its pixel height is not the object's), or spans
     under `min_rows` rows."""
-    rows = np.flatnonzero(mask.any(axis=1))
     height = size.height if isinstance(size, ObjectSize) else float(size)
-    if len(rows) < min_rows or not np.isfinite(height) or height <= 0:
+    if not np.isfinite(height) or height <= 0:
+        return None
+    rows = pixel_rows(mask, min_rows, blocked)
+    if rows is None:
+        return None
+    extent = height
+    if isinstance(size, ObjectSize):
+        r, c = np.nonzero(mask)
+        theta = _look_down(camera, float(r.mean()) + 0.5, float(c.mean()) + 0.5)
+        extent = height * np.cos(theta) + min(size.height, size.longest) * abs(np.sin(theta))
+    return float(camera.fy * extent / rows)
+
+
+def pixel_rows(mask: np.ndarray, min_rows: int = 3, blocked: np.ndarray | None = None) -> int | None:
+    """How many rows a mask [H, W] spans, when they are the whole object's: None when it is cut
+    by the image border or, below or above it, by `blocked` [H, W] pixels (another object in
+    front: more than a tenth of a 2-px ring around it), or spans under `min_rows` rows."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if len(rows) < min_rows:
         return None
     if rows[0] == 0 or rows[-1] == mask.shape[0] - 1 or mask[:, 0].any() or mask[:, -1].any():
         return None
@@ -110,9 +127,4 @@ def size_depth(mask: np.ndarray, camera: Camera, size: ObjectSize | float, min_r
         ring = cv2.dilate(mask.astype(np.uint8), k, iterations=2).astype(bool) & ~mask
         if (ring & blocked).sum() > 0.1 * ring.sum():
             return None
-    extent = height
-    if isinstance(size, ObjectSize):
-        r, c = np.nonzero(mask)
-        theta = _look_down(camera, float(r.mean()) + 0.5, float(c.mean()) + 0.5)
-        extent = height * np.cos(theta) + min(size.height, size.longest) * abs(np.sin(theta))
-    return float(camera.fy * extent / (rows[-1] - rows[0] + 1))
+    return int(rows[-1] - rows[0] + 1)

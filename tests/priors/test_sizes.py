@@ -113,3 +113,45 @@ def test_contact_takes_the_nearest_feet():
     low = contact_depth(m, ground, 1.0, percentile=10)
     assert low == pytest.approx(float(ground[34, 22]), rel=0.02)
     assert contact_depth(m, ground, 1.0) > 1.1 * low        # the median sees the ground under the belly
+
+
+def test_a_bouncing_object_is_measured_against_itself_on_the_ground():
+    # 10 frames of one object 1 m tall at 6 m: on the ground in frames 0 and 9, up to 8 rows above
+    # it between (a bounce). Its category says 3 m: the size depth (18 m) never overrules the
+    # contact. Its own contact x rows on the ground puts the flying frames back at 6 m.
+    cam = _camera(64, 96)
+    m, ground = _drawn(cam, 6.0, 1.0)
+    lifts = [0, 3, 6, 8, 8, 8, 8, 6, 3, 0]
+    masks = np.stack([np.where(np.roll(m, -k, axis=0), 1, 0) for k in lifts])
+    grounds = ground[None].repeat(len(lifts), 0)
+    wrong = ObjectSize(3.0, 3.0, "ground")
+    contact = object_depths(masks, 1, grounds, [cam] * len(lifts), wrong)
+    own = object_depths(masks, 1, grounds, [cam] * len(lifts), wrong, own_lift_ratio=1.15)
+    assert own[0] == contact[0] == pytest.approx(6.0, rel=0.1)
+    assert np.all(contact[3:7] > 1.25 * 6.0)                   # the ground seen under it lies behind
+    high = np.array(lifts) >= 6
+    np.testing.assert_allclose(own[high], own[0], rtol=1e-6)    # the same rows: the same depth
+    assert np.all(own <= 1.15 * own[0])        # 3 rows up: within the ratio, the contact stays (6.6 m)
+    # no plan (no size, a real video's moving region): the contact as it was
+    assert np.array_equal(object_depths(masks, 1, grounds, [cam] * 10, None, own_lift_ratio=1.15),
+                          object_depths(masks, 1, grounds, [cam] * 10, None), equal_nan=True)
+
+
+def test_an_object_walking_away_on_the_ground_keeps_its_contact_depth():
+    # nearer and farther on the ground: contact x rows stays put, nothing counts as lifted
+    cam = _camera(64, 96)
+    zs = [4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+    masks = np.stack([np.where(_drawn(cam, z, 1.0)[0], 1, 0) for z in zs])
+    grounds = ground_plane_depth(cam)[None].repeat(len(zs), 0)
+    size = ObjectSize(3.0, 3.0, "ground")
+    own = object_depths(masks, 1, grounds, [cam] * len(zs), size, own_lift_ratio=1.15)
+    assert np.array_equal(own, object_depths(masks, 1, grounds, [cam] * len(zs), size))
+    np.testing.assert_allclose(own, zs, rtol=0.12)
+
+
+@pytest.mark.parametrize("bad", [1.0, 0.5, -2.0, float("nan"), float("inf")])
+def test_own_lift_ratio_must_exceed_one(bad):
+    from morphosim_gym.priors.rgb import RGBPriorEstimators
+
+    with pytest.raises(ValueError, match="own_lift_ratio"):
+        RGBPriorEstimators(own_lift_ratio=bad)
