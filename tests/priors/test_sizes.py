@@ -155,3 +155,25 @@ def test_own_lift_ratio_must_exceed_one(bad):
 
     with pytest.raises(ValueError, match="own_lift_ratio"):
         RGBPriorEstimators(own_lift_ratio=bad)
+
+
+def test_an_object_judged_by_its_own_scale_is_not_lifted_by_a_wrong_category_size():
+    # 1 m tall, standing at 6 m in every frame, of a category whose size says 0.6 m: the size
+    # depth (4.4 m) would lift it off the ground; measured against itself it never leaves it
+    cam = _camera(64, 96)
+    m, ground = _drawn(cam, 6.0, 1.0)
+    masks = np.where(m, 1, 0)[None].repeat(6, 0)
+    grounds = ground[None].repeat(6, 0)
+    small = ObjectSize(0.6, 0.6, "ground")
+    by_category = object_depths(masks, 1, grounds, [cam] * 6, small)
+    own = object_depths(masks, 1, grounds, [cam] * 6, small, own_lift_ratio=1.15)
+    np.testing.assert_allclose(by_category, size_depth(m, cam, small), rtol=1e-6)
+    assert by_category[0] < 0.8 * 6.0                          # 4.4 m: the look-down adds depth extent
+    np.testing.assert_allclose(own, 6.0, rtol=0.1)
+    # too few whole frames to judge by (frames 2-5 reach the left border): the category's size
+    # decides where it can, as before
+    cut = masks.copy()
+    rows = np.flatnonzero(m.any(axis=1))
+    cut[2:, rows[0]:rows[-1] + 1, :m.shape[1] // 2] = 1
+    unjudged = object_depths(cut, 1, grounds, [cam] * 6, small, own_lift_ratio=1.15)
+    np.testing.assert_allclose(unjudged[:2], by_category[:2], rtol=1e-6)
