@@ -51,8 +51,10 @@ class RGBPriorEstimators:
       a backdrop as far as the farthest ground seen; the sky: 0); each object region gets the
       ground depth where its lowest pixels meet the ground (objects stand on the ground), or,
       given its real size (`sizes`, by label: `sizes.planned_sizes`), the depth at which
-      something that tall covers its rows when it swims or flies, touches no ground, or is
-      lifted off it (`object_depths`); the median ground depth when neither is known.
+      something that tall covers its rows when it swims or flies or touches no ground; a
+      planned object off the ground (a bouncing ball in the air) is found by measuring it
+      against itself on the ground, its contact depth times its pixel height, and put at the
+      depth its rows give there (`object_depths`); the median ground depth when neither is known.
     - tracks: chained DIS optical flow with a forward-backward check (`tracks.flow_tracks`).
 
     Attributes:
@@ -283,12 +285,12 @@ def object_depths(masks: np.ndarray, inst: int, ground: np.ndarray, cameras: Seq
     With `own_lift_ratio` (and a `size`: a planned object), the object is first measured
     against itself: its contact depth times its mask's pixel height (`pixel_rows`) stays the same
     while it stands on the ground, wherever it goes; in a frame where that product is
-    `own_lift_ratio` times its value on the ground (the 5th percentile over the frames: a bouncing
-    ball touches the ground in a tenth of them), the
-    contact lies behind it (a bouncing ball in the air), and its depth is that value over its
-    rows there; the category's size then only fills frames without a contact (the category's
-    size is a type's, not this object's: a real-asset car about a third taller than the
-    category's took its size depth, 25% too near, in 40 of 49 frames)."""
+    `own_lift_ratio` times its value on the ground (the 5th percentile over the frames: a
+    bouncing ball touches the ground in a tenth of them), the contact lies behind it (the ball in
+    the air), and its depth is that value over its rows there. The category's size then only
+    fills frames without a contact (it is a type's size, not this object's: a real-asset car
+    about a third taller than the category's took its size depth, 25% too near, in 40 of 49
+    frames)."""
     t = len(masks)
     contact = np.full(t, np.nan)
     by_size = np.full(t, np.nan)
