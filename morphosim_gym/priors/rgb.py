@@ -15,6 +15,7 @@ from .masks import box_masks, label_regions, motion_foreground, planned_boxes, s
 from .overlaps import split_by_motion
 from .protocol import BoxTrack
 from .rims import trim_rims
+from .siblings import depths_from_siblings
 from .sizes import ObjectSize, pixel_rows, size_depth
 from .skyline import horizon_rows, sky_region
 from .tracks import flow_tracks
@@ -84,6 +85,11 @@ class RGBPriorEstimators:
             0.74-0.79 m, a product 26.6-50.9 where the ground truth's stays 26.7-27.6); the size
             test above then only fills the frames without a contact. None: off (the size test
             alone).
+        sibling_scale: numbered instances of one planned ground object ("sheep 1", "sheep 2")
+            share its size: where more than half of one's contact is hidden by other objects,
+            its depth is a sibling's whose contact shows, times that sibling's pixel width over
+            its own (`siblings.depths_from_siblings`; the example's rear sheep: 5.9 m where it
+            walks at 4.45 m).
         backdrop: pixels above the horizon are part of the setting, at the depth of the farthest
             ground seen (a backdrop: a generated frame draws something there); False leaves them
             unknown (depth 0, mask -1).
@@ -106,6 +112,7 @@ class RGBPriorEstimators:
     backdrop: bool = True
     lifted_ratio: float = 1.35
     own_lift_ratio: float | None = 1.15
+    sibling_scale: bool = True
     contact_percentile: float = 10.0
     ground: bool = True
     colour_refine: bool = True
@@ -153,14 +160,22 @@ class RGBPriorEstimators:
         valid = out[out > 0]
         fallback = float(np.median(valid)) if valid.size else 1.0
         ground = out.copy()
+        depths: dict[int, np.ndarray] = {}
+        groups: dict[str, list[int]] = {}
         for inst in np.unique(masks):
             if inst <= SETTING_ID:
                 continue
-            size = (sizes or {}).get(_base_name((labels or {}).get(int(inst), "")))
+            base = _base_name((labels or {}).get(int(inst), ""))
+            size = (sizes or {}).get(base)
             if size is not None and size.height < 0.2 * size.longest:
                 continue                # flat on the ground (a plate): the ground's own depth
-            z = object_depths(masks, int(inst), ground, cams, size, self.lifted_ratio, self.contact_percentile,
-                              own_lift_ratio=self.own_lift_ratio)
+            depths[int(inst)] = object_depths(masks, int(inst), ground, cams, size, self.lifted_ratio,
+                                              self.contact_percentile, own_lift_ratio=self.own_lift_ratio)
+            if size is not None and size.mobility not in ("swim", "air"):
+                groups.setdefault(base, []).append(int(inst))
+        if self.sibling_scale:
+            depths = depths_from_siblings(masks, depths, list(groups.values()))
+        for inst, z in depths.items():
             z = np.where(np.isfinite(z), z, fallback)
             for i in range(t):
                 out[i][masks[i] == inst] = z[i]
