@@ -46,14 +46,18 @@ def depths_from_siblings(masks: np.ndarray, depths: Mapping[int, np.ndarray], gr
     """[T] depths per instance, with the frames where more than `hidden` of an instance's contact
     is hidden by other objects replaced by a sibling's depth (same group: one planned size) times
     the sibling's pixel width over its own, the median over the siblings whose contact shows, and
-    never nearer than the nearest sibling hiding it. Frames without such a sibling, or without
-    whole widths, keep their depth."""
+    never nearer than the nearest sibling hiding it. Hidden frames without such a sibling or
+    without whole widths take it interpolated in time from the replaced ones, where there are
+    any; other frames keep their depth."""
     out = {k: np.array(v, dtype=np.float64) for k, v in depths.items()}
+    t = len(masks)
     for group in groups:
         members = [k for k in group if k in depths]
         if len(members) < 2:
             continue
-        for i in range(len(masks)):
+        covered = {k: np.zeros(t, bool) for k in members}      # hidden in that frame
+        scaled_at = {k: np.zeros(t, bool) for k in members}    # and given a sibling's scale
+        for i in range(t):
             objects = masks[i] > 0
             seen = {}
             for k in members:
@@ -62,6 +66,7 @@ def depths_from_siblings(masks: np.ndarray, depths: Mapping[int, np.ndarray], gr
                     others = objects & ~m
                     seen[k] = (m, hidden_share(m, others), whole_width(m, others))
             for a, (ma, share, width) in seen.items():
+                covered[a][i] = share > hidden
                 if share <= hidden or width is None:
                     continue
                 scaled, front = [], []
@@ -74,6 +79,14 @@ def depths_from_siblings(masks: np.ndarray, depths: Mapping[int, np.ndarray], gr
                         front.append(depths[b][i])
                 if scaled:
                     out[a][i] = max(float(np.median(scaled)), max(front, default=0.0))
+                    scaled_at[a][i] = True
+        for a in members:
+            # hidden frames without a whole width go on from the scaled ones, not from the far
+            # contact (a depth jumping between the two within a clip)
+            gap = covered[a] & ~scaled_at[a]
+            if scaled_at[a].any() and gap.any():
+                k = np.flatnonzero(scaled_at[a])
+                out[a][gap] = np.interp(np.flatnonzero(gap), k, out[a][k])
     return out
 
 

@@ -43,7 +43,7 @@ from .video_labels import video_estimators
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 25     # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 26     # bumped when the method changes, so older results are fitted again
 
 
 @dataclass(frozen=True)
