@@ -63,3 +63,13 @@ def test_the_estimators_use_it_for_numbered_instances_only():
     assert behind(off, labels) > 1.1 * behind(on, labels)     # its few free columns read the far ground
     other = {0: "grass", 1: "sheep", 2: "dog"}                 # two planned objects, not one numbered
     assert behind(on, other) == pytest.approx(behind(off, other))
+
+
+def test_hidden_frames_without_a_whole_width_go_on_from_the_scaled_ones():
+    # frames 0 and 2 scaled from the sibling; in frame 1 a third object beside its end cuts its
+    # width: its depth is interpolated in time, not its far contact (a jump within the clip)
+    m = np.concatenate([_pair(), _pair(), _pair()])
+    m[1, 10:21, 35:38] = 3
+    depths = {1: np.array([9.0, 9.0, 9.0]), 2: np.array([3.0, 3.3, 3.6])}
+    out = depths_from_siblings(m, depths, [[1, 2]])
+    np.testing.assert_allclose(out[1], [3.0 * 20 / 15, 3.3 * 20 / 15, 3.6 * 20 / 15])
