@@ -6,7 +6,7 @@ import numpy as np
 
 from ..scene.camera import Camera
 
-__all__ = ["contact_depth", "ground_plane_depth"]
+__all__ = ["below_lowest", "contact_depth", "ground_plane_depth"]
 
 
 def ground_plane_depth(camera: Camera, ground_height: float = 0.0, max_depth: float = 50.0) -> np.ndarray:
@@ -31,14 +31,9 @@ def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked
     than the ground seen under its belly). Columns where the pixel below is `blocked` [H, W] (another object in
     front hides the contact) are left out unless every column is. `fallback` when the mask
     touches no ground (a fish in the water, a bird in the sky) or is empty."""
-    rows, cols = np.nonzero(mask)
-    if len(rows) == 0:
+    c, below = below_lowest(mask)
+    if len(c) == 0:
         return float(fallback)
-    h = mask.shape[0]
-    bottom = np.full(mask.shape[1], -1)
-    np.maximum.at(bottom, cols, rows)
-    c = np.flatnonzero(bottom >= 0)
-    below = np.minimum(bottom[c] + 1, h - 1)
     if blocked is not None:
         free = ~blocked[below, c]
         if free.any():
@@ -46,3 +41,13 @@ def contact_depth(mask: np.ndarray, ground: np.ndarray, fallback: float, blocked
     z = ground[below, c]
     z = z[z > 0]
     return float(np.percentile(z, percentile)) if z.size else float(fallback)
+
+
+def below_lowest(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The columns a mask [H, W] covers, and in each the row just below its lowest pixel (its
+    own last row at the image's bottom edge): where it meets what it stands on."""
+    rows, cols = np.nonzero(mask)
+    bottom = np.full(mask.shape[1], -1)
+    np.maximum.at(bottom, cols, rows)
+    c = np.flatnonzero(bottom >= 0)
+    return c, np.minimum(bottom[c] + 1, mask.shape[0] - 1)

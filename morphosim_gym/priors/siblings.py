@@ -13,20 +13,16 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from .depth import below_lowest
+
 __all__ = ["hidden_share", "whole_width", "depths_from_siblings"]
 
 
 def hidden_share(mask: np.ndarray, others: np.ndarray) -> float:
     """Share of a mask's [H, W] columns whose pixel just below its lowest one is `others` [H, W]
     (another object in front hides its contact there); 0 for an empty mask."""
-    rows, cols = np.nonzero(mask)
-    if len(rows) == 0:
-        return 0.0
-    bottom = np.full(mask.shape[1], -1)
-    np.maximum.at(bottom, cols, rows)
-    c = np.flatnonzero(bottom >= 0)
-    below = np.minimum(bottom[c] + 1, mask.shape[0] - 1)
-    return float(others[below, c].mean())
+    c, below = below_lowest(mask)
+    return float(others[below, c].mean()) if len(c) else 0.0
 
 
 def whole_width(mask: np.ndarray, others: np.ndarray) -> int | None:
@@ -64,18 +60,18 @@ def depths_from_siblings(masks: np.ndarray, depths: Mapping[int, np.ndarray], gr
                 m = masks[i] == k
                 if m.any():
                     others = objects & ~m
-                    seen[k] = (m, hidden_share(m, others), whole_width(m, others))
-            for a, (ma, share, width) in seen.items():
+                    seen[k] = (below_lowest(m), hidden_share(m, others), whole_width(m, others))
+            for a, ((cols, below), share, width) in seen.items():
                 covered[a][i] = share > hidden
                 if share <= hidden or width is None:
                     continue
                 scaled, front = [], []
-                for b, (mb, share_b, width_b) in seen.items():
+                for b, (_, share_b, width_b) in seen.items():
                     if b == a or not np.isfinite(depths[b][i]):
                         continue
                     if share_b <= hidden and width_b is not None:
                         scaled.append(depths[b][i] * width_b / width)
-                    if _hides(mb, ma):
+                    if (masks[i][below, cols] == b).any():          # b lies just under a: in front of it
                         front.append(depths[b][i])
                 if scaled:
                     out[a][i] = max(float(np.median(scaled)), max(front, default=0.0))
@@ -89,11 +85,3 @@ def depths_from_siblings(masks: np.ndarray, depths: Mapping[int, np.ndarray], gr
                 out[a][gap] = np.interp(np.flatnonzero(gap), k, out[a][k])
     return out
 
-
-def _hides(front: np.ndarray, behind: np.ndarray) -> bool:
-    """Whether `front`'s pixels lie just below `behind`'s lowest pixel in some column."""
-    rows, cols = np.nonzero(behind)
-    bottom = np.full(behind.shape[1], -1)
-    np.maximum.at(bottom, cols, rows)
-    c = np.flatnonzero(bottom >= 0)
-    return bool(front[np.minimum(bottom[c] + 1, behind.shape[0] - 1), c].any())
