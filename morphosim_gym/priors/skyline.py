@@ -22,7 +22,7 @@ import numpy as np
 
 from ..metrics.image import rgb_to_lab
 
-__all__ = ["horizon_rows", "sky_region"]
+__all__ = ["horizon_rows", "sky_region", "sky_seam"]
 
 def horizon_rows(below: np.ndarray) -> np.ndarray:
     """[W] int: per column, the number of rows above the first one where `below` [H, W] (the
@@ -88,14 +88,24 @@ def _seam(sky_cost: np.ndarray, set_cost: np.ndarray, cap: np.ndarray, smooth: f
     return out
 
 
-def sky_region(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, seed_rows: float = 0.1,
-               ground_rows: float = 0.6, smooth: float = 3.0, iters: int = 3, min_separation: float = 0.5,
-               min_seed: int = 32) -> np.ndarray | None:
+def sky_region(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, **kwargs: float) -> np.ndarray | None:
     """[H, W] bool: the sky of one frame [H, W, 3] (see the module docstring), or None where
-    colour cannot tell. `objects` [H, W] bool marks the objects' pixels (never sky), `horizon`
-    [W] the rows above the ground plane's horizon per column (`horizon_rows`). Seeds: the sky from
-    the top `seed_rows` of the image above the horizon, the setting from the lowest `ground_rows`
-    of the rows below it (which the seam never enters); each needs `min_seed` pixels."""
+    colour cannot tell: the rows above `sky_seam`'s boundary, less the objects' pixels."""
+    seam = sky_seam(frame, objects, horizon, **kwargs)
+    if seam is None:
+        return None
+    return (np.arange(objects.shape[0])[:, None] < seam[None, :]) & ~objects
+
+
+def sky_seam(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, seed_rows: float = 0.1,
+             ground_rows: float = 0.6, smooth: float = 3.0, iters: int = 3, min_separation: float = 0.5,
+             min_seed: int = 32) -> np.ndarray | None:
+    """[W] int: per column of one frame [H, W, 3], the first row of the setting below the sky (see
+    the module docstring), or None where colour cannot tell. `objects` [H, W] bool marks the
+    objects' pixels (never sky), `horizon` [W] the rows above the ground plane's horizon per
+    column (`horizon_rows`). Seeds: the sky from the top `seed_rows` of the image above the
+    horizon, the setting from the lowest `ground_rows` of the rows below it (which the seam never
+    enters); each needs `min_seed` pixels."""
     h, w = objects.shape
     if frame.shape[:2] != (h, w) or horizon.shape != (w,):
         raise ValueError(f"Expected a frame [H, W, 3], objects [H, W] and horizon [W] of one size, found "
@@ -111,12 +121,11 @@ def sky_region(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, seed
         return None
     cap = np.minimum(ground_top, h)                     # the seam stays above the setting's seed
     sky_m, set_m = _model(feat[sky_seed]), _model(feat[setting_seed])
-    sky = np.zeros((h, w), bool)
+    b = np.zeros(w, np.int64)
     for _ in range(iters):
         c_sky = np.where(free, _nll(feat, sky_m), 0.0)
         c_set = np.where(free, _nll(feat, set_m), 0.0)
         b = _seam(c_sky, c_set, cap, smooth)
-        sky = rows < b[None, :]
         # refit from the seam's sides, two rows clear of it
         sky_px = free & (rows < b[None, :] - 2)
         set_px = free & (rows >= b[None, :] + 2)
@@ -125,4 +134,4 @@ def sky_region(frame: np.ndarray, objects: np.ndarray, horizon: np.ndarray, seed
         sky_m, set_m = _model(feat[sky_px]), _model(feat[set_px])
     if _bhattacharyya(sky_m, set_m) < min_separation:
         return None
-    return sky & free
+    return b

@@ -177,3 +177,28 @@ def test_an_object_judged_by_its_own_scale_is_not_lifted_by_a_wrong_category_siz
     cut[2:, rows[0]:rows[-1] + 1, :m.shape[1] // 2] = 1
     unjudged = object_depths(cut, 1, grounds, [cam] * 6, small, own_lift_ratio=1.15)
     np.testing.assert_allclose(unjudged[:2], by_category[:2], rtol=1e-6)
+
+
+def test_a_flat_object_takes_the_depth_of_its_top_not_of_the_ground():
+    # a plate lying on the ground: with `flat_tops`, its pixels at the plane its height above
+    # the ground (a fit that puts the plate and the table in one plane draws the table over the
+    # plate's rim)
+    from morphosim_gym.priors import RGBPriorEstimators
+
+    cam = _camera()
+    plate = CATEGORY_SIZES["plate"]
+    assert plate.height < 0.2 * plate.longest
+    masks = np.zeros((2, 48, 64), np.int32)
+    masks[:, 30:36, 20:40] = 2
+    frames = np.zeros((2, 48, 64, 3), np.uint8)
+    labels, sizes = {0: "ground", 2: "plate"}, {"plate": plate}
+    depth = RGBPriorEstimators(backdrop=True, flat_tops=True).depth(frames, cam, masks, labels, sizes)
+    m = masks[0] == 2
+    ground = ground_plane_depth(cam)[m]
+    by_default = RGBPriorEstimators(backdrop=True).depth(frames, cam, masks, labels, sizes)
+    np.testing.assert_allclose(by_default[0][m], ground, rtol=1e-6)        # off by default: the ground's
+    top = ground_plane_depth(cam, plate.height)[m]
+    np.testing.assert_allclose(depth[0][m], top, rtol=1e-6)
+    assert np.all(depth[1][m] < ground - 1e-3)
+    seen = (masks[0] == 0) & (ground_plane_depth(cam) > 0)          # the ground around it keeps its depth
+    np.testing.assert_allclose(depth[0][seen], ground_plane_depth(cam)[seen], rtol=1e-6)
