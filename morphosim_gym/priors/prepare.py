@@ -84,9 +84,10 @@ def default_estimators(clip: GeneratedClip, **overrides: Any) -> RGBPriorEstimat
     bus's far road, camera 8.1 m up, a wall at 48.6 m: novel views 3-5 dB worse). Not where
     walls close the view (`CLOSED_SETTINGS`): the floor and a wall at 8 heights stood in two
     pieces where the room's wall is, and a room's novel views lost 3-11 dB (the held-out cat,
-    its first run); there the floor still reaches `max_depth`."""
+    its first run); there the floor still reaches `max_depth`, and a wall stands where the
+    setting's colour changes above it (`walls`)."""
     sky = open_sky(clip)
-    est = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=not sky,
+    est = RGBPriorEstimators(setting_label=setting_label(clip), backdrop=not sky, walls=not sky,
                              ground=setting_word(clip) not in GROUNDLESS_SETTINGS,
                              far_heights=FAR_HEIGHTS if sky else None)
     return replace(est, **overrides) if overrides else est
@@ -131,6 +132,7 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
         out = est.tracks(clip.frames)
         fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
     origin = {n: ("estimated" if estimate[n] else _carried(clip, n)) for n in PRIOR_NAMES}
-    fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__}
+    walls = bool(estimate["depth"] and getattr(est, "walls", False) and getattr(est, "backdrop", False))
+    fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__, "prior_walls": walls}
     return replace(clip, **fields)
 

@@ -106,11 +106,13 @@ class RGBPriorEstimators:
         rims: trim a planned clip's moving objects' outlines (see masks above).
         motion_split: share out overlapping moving objects by their motion (see masks above).
         walls: with `backdrop`, a wall where the setting's colour changes above the floor (see
-            depth above). Off by default: the wall's depth comes out right (the mug clip's wall,
-            1.23-1.33 m away: 22 m without, 1.26-1.36 m with), but fits do not yet cope with a
-            near wall: novel views of the mug clip lost 0.6-5.1 dB (hidden wall Gaussians of
-            the floor's colour, stretched along the wall's foot, show in a turned view),
-            the cube clip's moved within 0.4 dB (2026-12-06).
+            depth above); `prepare.default_estimators` turns it on in settings closed by walls.
+            The mug clip's wall, 1.23-1.33 m away, is at 1.26-1.36 m with it, 22 m without. A
+            fit to a near wall needs its Gaussians kept near their first size and the wall
+            continued in the colours the views show (`reconstruct.pipeline` does both when
+            `info["prior_walls"]` says so): without, floor-coloured streaks along the wall's
+            foot, hidden in the input view, crossed it in turned views (mug novel views -0.6
+            to -5.1 dB).
         flat_tops: a flat object's pixels at its top rather than on the ground. Off by
             default: the plate's depth error fell from 4.5% to 1% and its fitted IoU rose
             (cube clip 0.71 -> 0.74; held-out 0.61 -> 0.62 and 0.72 -> 0.73), but novel views

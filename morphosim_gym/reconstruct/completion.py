@@ -296,13 +296,16 @@ def find_backdrop(model: DynamicGaussians, dynamic: dict, background: set[int], 
 
 
 def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: Backdrop, rng: np.random.Generator,
-                       max_new: int, spread: float = 0.75, window: float = 0.1) -> int:
+                       max_new: int, spread: float = 0.75, window: float = 0.1, seen_colours: bool = False) -> int:
     """Continue the backdrop sideways, along its plane, by `spread` of its seen width on either
     side, and fill the holes in what was seen (behind the objects). Within the seen width the
     top follows the highest point seen within `window` of the seen width; beyond it, the median
     of those tops (a wall keeps its edge, hills their typical height rather than the last
     peak). The bottom is the lowest point seen. Each disc takes the colour of the nearest seen
-    backdrop Gaussian; the cells grow where more than `max_new` would be needed. Discs that an
+    backdrop Gaussian (with `seen_colours`, the nearest one the input views show, the frontmost
+    where several share a cell: a fit leaves hidden ones of any colour behind a near wall's
+    front layer); the cells grow where more than
+    `max_new` would be needed. Discs that an
     input view sees through (`seen_through`) are left out. Returns how many discs were added."""
     a = _arrays(model)
     means, ids, colors, scales, opac = a.means, a.ids, a.colors, a.scales, a.opac
@@ -347,7 +350,13 @@ def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: B
     if len(pu) > max_new:                                    # keep those nearest the seen backdrop
         order = np.argsort(np.abs(pu - np.clip(pu, uv[:, 0].min(), uv[:, 0].max())), kind="stable")[:max_new]
         rows, cols, pu, pv = rows[order], cols[order], pu[order], pv[order]
-    src = on[_nearest_source(uv, lo, size, cell)[rows, cols]]
+    seen = on
+    if seen_colours:                # the backdrop Gaussians the input views show, the front one of a cell
+        seen = on[visible_weights(model, clip, 0)[on] >= 0.5]
+        seen = seen if len(seen) else on
+        seen = seen[np.argsort(means[seen] @ n, kind="stable")]        # the last in a cell is its source
+    suv = np.c_[means[seen] @ e1, means[seen] @ e2]
+    src = seen[_nearest_source(suv, lo, size, cell)[rows, cols]]
     jitter = 0.3 * (rng.random((len(pu), 2)) - 0.5) * cell
     pts = (pu + jitter[:, 0])[:, None] * e1 + (pv + jitter[:, 1])[:, None] * e2 + backdrop.offset * n
     hidden = ~seen_through(pts, clip)              # an input view sees past it: no backdrop there
@@ -605,10 +614,12 @@ def _complete_symmetry(model: DynamicGaussians, clip: GeneratedClip, dynamic: di
 
 
 def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: int = 0,
-             reference: dict | None = None, max_ground: int = 12000, max_backdrop: int = 4000) -> dict[str, int]:
+             reference: dict | None = None, max_ground: int = 12000, max_backdrop: int = 4000,
+             seen_colours: bool = False) -> dict[str, int]:
     """Add ground, backdrop and far-side Gaussians to a fitted model (in place); returns how many
     of each. `max_ground` and `max_backdrop` bound the discs of the ground's rings and of the
-    backdrop (splitting those too close to a camera can add a few).
+    backdrop (splitting those too close to a camera can add a few); `seen_colours`: the backdrop's
+    new discs take the colours of the backdrop Gaussians the input views show (`_complete_backdrop`).
 
     Ground cells also fill the gaps that the input views see between observed Gaussians (far
     ground seen at a grazing angle is sparse in 3D), so a short fit should follow to blend them
@@ -624,7 +635,7 @@ def complete(model: DynamicGaussians, clip: GeneratedClip, dynamic: dict, seed: 
     wall = 0
     if backdrop is not None:
         first = model.num
-        _complete_backdrop(model, clip, backdrop, rng, max_backdrop)
+        _complete_backdrop(model, clip, backdrop, rng, max_backdrop, seen_colours=seen_colours)
         wall = _split_near(model, clip, first)
     first = model.num
     _complete_symmetry(model, clip, dynamic, reference, background)

@@ -282,9 +282,12 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         loss.backward()
         accumulate(state, model, state["footprint"])
         optimizer.step()
+        s = cfg.strategy
         with torch.no_grad():
             model.quats.data /= model.quats.data.norm(dim=-1, keepdim=True)
-        s = cfg.strategy
+            if s.max_footprints is not None:
+                cap = torch.log(s.max_footprints * state["footprint"])[:, None]
+                model.log_scales.data = torch.minimum(model.log_scales.data, cap)
         if s.refine_start <= it < s.refine_stop and (it - s.refine_start) % s.refine_every == s.refine_every - 1:
             counts = refine(model, optimizer, state, s, state["footprint"], gen)
             log["refine"].append({"iteration": it, **counts, "gaussians": model.num})

@@ -323,13 +323,17 @@ def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_trac
     return rots, trans, good
 
 
-def estimate_background_color(clip: GeneratedClip) -> tuple[float, float, float]:
-    """Colour of the pixels with no depth (nothing drawn there: sky / backdrop), median over the clip;
-    mid-grey if every pixel has a depth."""
+def estimate_background_color(clip: GeneratedClip, far_share: float | None = None) -> tuple[float, float, float]:
+    """Colour of the pixels with no depth (nothing drawn there: sky / backdrop), median over the clip.
+    Where every pixel has a depth: with `far_share`, the colour of that share of the farthest
+    pixels (a room's walls: what lies past them is most like the farthest thing seen), else
+    mid-grey; mid-grey without depth."""
     if clip.depth is None:
         return (0.5, 0.5, 0.5)
     empty = clip.depth <= 0
     if not empty.any():
-        return (0.5, 0.5, 0.5)
+        if far_share is None:
+            return (0.5, 0.5, 0.5)
+        empty = clip.depth >= np.quantile(clip.depth, 1.0 - far_share)
     rgb = np.median(clip.frames[empty].astype(np.float64), axis=0) / 255.0
     return tuple(float(x) for x in np.clip(rgb, 0, 1))

@@ -12,7 +12,10 @@ the ones the clip carries, with the missing ones estimated from the frames (a cl
 and cameras alone is reconstructed, never refused); "estimated" estimates all three;
 "ground_truth" takes the clip's own as they are. A clip in which nothing can be seen to move
 (a single frame, or frames that do not change) has estimated masks holding only the setting and
-is reconstructed as that static setting (a reduced result, not an error). Only the clip's frames, cameras and priors
+is reconstructed as that static setting (a reduced result, not an error). Where the estimated
+priors stand a room's walls near (`info["prior_walls"]`), the fit keeps Gaussians within
+`NEAR_WALL_FOOTPRINTS` of their first size, the completion continues the wall in the colours the
+views show, and the background is the farthest pixels' colour. Only the clip's frames, cameras and priors
 are used, never `clip.ground_truth`. Results are
 cached on disk by the content hash of the clip and the configuration (atomic writes), so a
 second call with the same clip and settings loads the scene instead of fitting again.
@@ -43,7 +46,12 @@ from .video_labels import video_estimators
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 26     # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 27     # bumped when the method changes, so older results are fitted again
+#: Where the estimated priors stand a room's walls at their distance (`RGBPriorEstimators.walls`),
+#: the fit keeps each Gaussian within this many times its first size (`Strategy.max_footprints`):
+#: a still camera cannot tell a floor-coloured streak along the wall's foot from the table's edge,
+#: and a turned view shows it across the wall.
+NEAR_WALL_FOOTPRINTS = 16.0
 
 
 @dataclass(frozen=True)
@@ -155,16 +163,20 @@ def _fit_scene(clip: GeneratedClip, cfg: ReconstructionConfig) -> Scene4D:
     validate_clip(clip)
     fit_cfg = cfg.fit if cfg.progress else _no_progress(cfg.fit)
     feat_cfg = cfg.features if cfg.progress else _no_progress(cfg.features)
+    near_walls = bool(clip.info.get("prior_walls"))
+    if near_walls and fit_cfg.strategy.max_footprints is None:
+        fit_cfg = replace(fit_cfg, strategy=replace(fit_cfg.strategy, max_footprints=NEAR_WALL_FOOTPRINTS))
     init = initialize(clip, cfg.init, seed=cfg.seed)
     model = init.model
-    background = estimate_background_color(clip)
+    background = estimate_background_color(clip, far_share=0.05 if near_walls else None)
     sky = sky_from_clip(clip) if cfg.sky else None
     fit_log = fit(model, clip, init.reference, init.dynamic, fit_cfg, seed=cfg.seed, background=background, sky=sky)
     if cfg.complete:
         from .completion import complete
 
         t_complete = time.perf_counter()
-        fit_log["completion"] = complete(model, clip, init.dynamic, seed=cfg.seed, reference=init.reference)
+        fit_log["completion"] = complete(model, clip, init.dynamic, seed=cfg.seed, reference=init.reference,
+                                         seen_colours=near_walls)
         fit_log["completion"]["seconds"] = time.perf_counter() - t_complete
         if cfg.complete_iterations > 0:
             # no densification in this short pass: only blend in what completion added

@@ -29,6 +29,8 @@ class Strategy:
         split_scale: Gaussians larger than this many footprints are split, smaller ones cloned.
         prune_opacity: Gaussians below this opacity are removed.
         max_gaussians: never grow beyond this many.
+        max_footprints: with a value, after every step each Gaussian's scales are kept within
+            this many times its footprint (its first size, the pixel it came from); None: free.
     """
 
     refine_start: int = 150
@@ -38,6 +40,7 @@ class Strategy:
     split_scale: float = 1.6
     prune_opacity: float = 0.02
     max_gaussians: int = 60000
+    max_footprints: float | None = None
 
 
 def initialize_state(model: DynamicGaussians) -> dict:

@@ -51,3 +51,18 @@ def test_wall_depth_from_a_given_seam():
     lost[:20] = 0
     np.testing.assert_allclose(wall_depth(cam, lost, ground)[:, 30:], depth[:, 30:], rtol=1e-5)
     assert not wall_depth(cam, np.zeros(W, np.int64), ground).any()
+
+
+def test_settings_closed_by_walls_get_them():
+    """`prepare_priors` stands walls in a table's or a room's clip (and says so in its info, for
+    the fit: `reconstruct.pipeline.NEAR_WALL_FOOTPRINTS`), never under an open sky."""
+    import morphosim_gym as ms
+    from morphosim_gym.priors import default_estimators, prepare_priors
+
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=48, height=48, num_frames=5, detail=0.5))
+    table = sim.generate_clip("a blue mug slides slowly across the table from left to right", seed=0)
+    road = sim.generate_clip("The bus is moving from right to left", seed=0)
+    assert default_estimators(table).walls and not default_estimators(road).walls
+    assert prepare_priors(table, "estimated").info["prior_walls"] is True
+    assert prepare_priors(road, "estimated").info["prior_walls"] is False
+    assert "prior_walls" not in prepare_priors(table, "ground_truth").info

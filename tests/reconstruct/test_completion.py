@@ -182,3 +182,30 @@ def test_points_an_input_view_sees_past_are_seen_through(mug):
     assert not seen_through(behind, mug).any()
     assert not seen_through(cam.position - 5.0 * cam.forward[None], mug).any()    # behind every camera
     assert not seen_through(front, replace(mug, depth=None)).any()
+
+
+@pytest.mark.parametrize("seen_colours", [False, True])
+def test_backdrop_colours_come_from_what_the_views_show(mug, seen_colours):
+    """A pink layer hidden 1 cm behind the wall (a fit leaves hidden Gaussians of any colour):
+    with `seen_colours` the wall's continuation takes the colours the views show."""
+    from morphosim_gym.reconstruct.completion import _append
+
+    model = initialize(mug, seed=0).model
+    backdrop = find_backdrop(model, {0: False, 1: True}, _background(mug), np.random.default_rng(0))
+    on = backdrop.inliers
+    with torch.no_grad():
+        model.opacity_logits[on] = 8.0                                      # an opaque wall in front
+        means = model.means.numpy()[on] - 0.01 * backdrop.normal          # behind the wall, away from the objects
+        quats, scales = model.quats.numpy()[on], model.scales().numpy()[on]
+        seen_rgb = np.median(model.colors().numpy()[on], axis=0)
+    pink = np.tile([1.0, 0.3, 0.8], (len(on), 1))
+    _append(model, means, quats, scales, np.full(len(on), 0.99), pink, model.object_ids.numpy()[on])
+    counts = complete(model, mug, {0: False, 1: True}, seed=0, seen_colours=seen_colours)
+    start = len(model.means) - counts["symmetry"] - counts["backdrop"]
+    with torch.no_grad():
+        rgb = model.colors().numpy()[start:start + counts["backdrop"]]
+    is_pink = np.abs(rgb - [1.0, 0.3, 0.8]).max(axis=1) < 0.05
+    if seen_colours:
+        assert not is_pink.any() and np.abs(np.median(rgb, 0) - seen_rgb).max() < 0.1
+    else:
+        assert is_pink.mean() > 0.2

@@ -133,3 +133,31 @@ def test_the_outline_of_exact_masks_counts_less_in_the_fit(clip):
                         for m in (exact.masks == exact.masks.max())])
     assert w[outline].max() < 1.0 and w.max() == 1.0 and data.track_weight is None
     assert ClipTensors(exact, [0], confidence=False).mask_weight is None
+
+
+def test_max_footprints_keeps_every_gaussian_near_its_first_size(clip):
+    """`Strategy.max_footprints` (used where a room's walls stand near): no Gaussian grows past
+    that many times its first size; a free fit lets some grow past it."""
+    from morphosim_gym.reconstruct.strategy import Strategy
+
+    def grown(max_footprints):
+        init = initialize(clip, seed=0)
+        model = init.model
+        first = model.scales().detach().max(dim=-1).values.clone()
+        strategy = Strategy(refine_start=10_000, max_footprints=max_footprints)       # no densification
+        cfg = FitConfig(iterations=60, progress=False, strategy=strategy)
+        fit(model, clip, init.reference, init.dynamic, cfg, seed=0, background=estimate_background_color(clip))
+        return (model.scales().detach().max(dim=-1).values / first).numpy()
+
+    assert grown(None).max() > 1.3
+    assert grown(1.3).max() <= 1.3 * (1 + 1e-5)
+
+
+def test_background_colour_of_a_room_is_its_farthest_pixels(clip):
+    """Where every pixel has a depth, mid-grey unless asked for the farthest pixels' colour."""
+    depth = np.broadcast_to(np.linspace(1.0, 10.0, clip.height)[::-1, None], (clip.num_frames, clip.height, clip.width))
+    frames = np.zeros_like(clip.frames)
+    frames[:, : clip.height // 10] = (200, 180, 160)                 # the farthest rows: the wall
+    walled = replace(clip, depth=np.ascontiguousarray(depth, dtype=np.float32), frames=frames)
+    assert estimate_background_color(walled) == (0.5, 0.5, 0.5)
+    np.testing.assert_allclose(estimate_background_color(walled, far_share=0.05), np.array([200, 180, 160]) / 255)
