@@ -304,9 +304,8 @@ def _complete_backdrop(model: DynamicGaussians, clip: GeneratedClip, backdrop: B
     peak). The bottom is the lowest point seen. Each disc takes the colour of the nearest seen
     backdrop Gaussian (with `seen_colours`, the nearest one the input views show, the frontmost
     where several share a cell: a fit leaves hidden ones of any colour behind a near wall's
-    front layer); the cells grow where more than
-    `max_new` would be needed. Discs that an
-    input view sees through (`seen_through`) are left out. Returns how many discs were added."""
+    front layer); the cells grow where more than `max_new` would be needed. Discs that an input
+    view sees through (`seen_through`) are left out. Returns how many discs were added."""
     a = _arrays(model)
     means, ids, colors, scales, opac = a.means, a.ids, a.colors, a.scales, a.opac
     n, on = backdrop.normal, backdrop.inliers

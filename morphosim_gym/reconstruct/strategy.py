@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 
 from .model import DynamicGaussians
@@ -41,6 +42,10 @@ class Strategy:
     prune_opacity: float = 0.02
     max_gaussians: int = 60000
     max_footprints: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.max_footprints is not None and not (np.isfinite(self.max_footprints) and self.max_footprints >= 1):
+            raise ValueError(f"Expected max_footprints >= 1 or None, found {self.max_footprints!r}")
 
 
 def initialize_state(model: DynamicGaussians) -> dict:

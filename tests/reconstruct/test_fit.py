@@ -161,3 +161,11 @@ def test_background_colour_of_a_room_is_its_farthest_pixels(clip):
     walled = replace(clip, depth=np.ascontiguousarray(depth, dtype=np.float32), frames=frames)
     assert estimate_background_color(walled) == (0.5, 0.5, 0.5)
     np.testing.assert_allclose(estimate_background_color(walled, far_share=0.05), np.array([200, 180, 160]) / 255)
+
+
+@pytest.mark.parametrize("bad", [0.5, 0.0, -2.0, float("nan"), float("inf")])
+def test_max_footprints_must_be_at_least_one(bad):
+    from morphosim_gym.reconstruct.strategy import Strategy
+
+    with pytest.raises(ValueError, match="max_footprints"):
+        Strategy(max_footprints=bad)
