@@ -132,7 +132,7 @@ def prepare_priors(clip: GeneratedClip, source: str = "auto", estimators: PriorE
         out = est.tracks(clip.frames)
         fields["tracks"], fields["track_visible"] = (None, None) if out is None else out
     origin = {n: ("estimated" if estimate[n] else _carried(clip, n)) for n in PRIOR_NAMES}
-    walls = bool(estimate["depth"] and getattr(est, "walls", False) and getattr(est, "backdrop", False))
+    walls = bool(estimate["depth"] and getattr(est, "stands_walls", False))
     fields["info"] = {**clip.info, "priors": origin, "prior_estimator": type(est).__name__, "prior_walls": walls}
     return replace(clip, **fields)
 

@@ -146,6 +146,12 @@ class RGBPriorEstimators:
         if self.own_lift_ratio is not None and not (np.isfinite(self.own_lift_ratio) and self.own_lift_ratio > 1):
             raise ValueError(f"Expected own_lift_ratio > 1 or None, found {self.own_lift_ratio!r}")
 
+    @property
+    def stands_walls(self) -> bool:
+        """Whether `depth` stands walls where the setting's colour changes above the floor
+        (`walls` on a seen ground closed by a backdrop)."""
+        return self.ground and self.backdrop and self.walls
+
     def _ground(self, camera: Camera) -> np.ndarray:
         """[H, W] camera depth of the ground plane as far as it is taken to be seen (`max_depth`,
         `far_heights`), 0 beyond."""
@@ -165,7 +171,8 @@ class RGBPriorEstimators:
               sizes: Mapping[str, ObjectSize] | None = None) -> np.ndarray:
         t = len(frames)
         cams = self._cameras(camera, t)
-        out = np.stack([self._ground(c) for c in cams])
+        grounds = [self._ground(c) for c in cams]
+        out = np.stack(grounds)
         far = float(out.max()) if np.any(out > 0) else self.max_depth     # a backdrop: the farthest ground seen
         if not self.ground:
             out = np.zeros_like(out)
@@ -173,10 +180,9 @@ class RGBPriorEstimators:
             out = np.where(out > 0, out, far).astype(np.float32)          # everything above the horizon
         if masks is None:
             return out
-        if self.ground and self.backdrop and self.walls:
+        if self.stands_walls:
             # where the setting changes colour above the floor, a wall stands on it
-            for i, c in enumerate(cams):
-                g = self._ground(c)
+            for i, (c, g) in enumerate(zip(cams, grounds)):
                 seam = sky_seam(np.asarray(frames[i]), masks[i] > SETTING_ID, horizon_rows(g > 0))
                 if seam is not None:
                     wall = wall_depth(c, seam, g)
