@@ -5,9 +5,10 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
+from .fused_ssim import fused_ssim_applies, fused_ssim_loss
 from .model import gather_rows
 
-__all__ = ["ssim_loss", "photometric_loss", "depth_loss", "scale_shift_depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
+__all__ = ["ssim_loss", "conv_ssim_loss", "photometric_loss", "depth_loss", "scale_shift_depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
            "arap_loss", "smooth_motion_loss", "psnr_torch"]
 
 _WINDOWS: dict[tuple, torch.Tensor] = {}
@@ -25,7 +26,16 @@ def _window(channels: int, dtype: torch.dtype) -> torch.Tensor:
 
 
 def ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    """1 - SSIM of two [H, W, C] images (Gaussian window 11, sigma 1.5)."""
+    """1 - SSIM of two [H, W, C] images (Gaussian window 11, sigma 1.5, zero padding): on CPU
+    tensors with a target `b` that needs no gradient, the compiled `fused_ssim_loss` (7x faster at
+    128 px, the same value to float rounding), else `conv_ssim_loss`."""
+    if fused_ssim_applies(a, b):
+        return fused_ssim_loss(a, b)
+    return conv_ssim_loss(a, b)
+
+
+def conv_ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """`ssim_loss` as torch convolutions (any device and dtype, gradients to both images)."""
     x = a.permute(2, 0, 1)[None]
     y = b.permute(2, 0, 1)[None]
     c = x.shape[1]
