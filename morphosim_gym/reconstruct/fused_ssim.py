@@ -82,11 +82,22 @@ def _blur(src, dst, tmp, g):
 
 
 @jit
+def _terms(moments, c, i, j):
+    """(mx, my, 2 mx my + c1, 2 sxy + c2, mx^2 + my^2 + c1, sxx + syy + c2) at one pixel."""
+    F = moments.dtype.type
+    mx = moments[0, c, i, j]
+    my = moments[1, c, i, j]
+    a1 = F(2) * mx * my + F(_C1)
+    a2 = F(2) * (moments[4, c, i, j] - mx * my) + F(_C2)
+    b1 = mx * mx + my * my + F(_C1)
+    b2 = moments[2, c, i, j] - mx * mx + moments[3, c, i, j] - my * my + F(_C2)
+    return mx, my, a1, a2, b1, b2
+
+
+@jit
 def _forward(x, y, g, moments, tmp, prod):
     """x, y [C, H, W]; fills moments [5, C, H, W] (mx, my, E[x^2], E[y^2], E[xy]); returns sum of S."""
     c_all, h, w = x.shape
-    F = x.dtype.type
-    c1, c2 = F(_C1), F(_C2)
     total = 0.0
     for c in range(c_all):
         _blur(x[c], moments[0, c], tmp, g)
@@ -105,12 +116,7 @@ def _forward(x, y, g, moments, tmp, prod):
         _blur(prod, moments[4, c], tmp, g)
         for i in range(h):
             for j in range(w):
-                mx = moments[0, c, i, j]
-                my = moments[1, c, i, j]
-                a1 = F(2) * mx * my + c1
-                a2 = F(2) * (moments[4, c, i, j] - mx * my) + c2
-                b1 = mx * mx + my * my + c1
-                b2 = moments[2, c, i, j] - mx * mx + moments[3, c, i, j] - my * my + c2
+                mx, my, a1, a2, b1, b2 = _terms(moments, c, i, j)
                 total += (a1 * a2) / (b1 * b2)
     return total
 
@@ -120,17 +126,11 @@ def _backward(x, y, g, moments, scale, grad, tmp, d_mx, d_exx, d_exy, blurred):
     """grad [C, H, W] = scale * d sum(S) / dx, from the forward pass's moments."""
     c_all, h, w = x.shape
     F = x.dtype.type
-    c1, c2 = F(_C1), F(_C2)
     k = F(scale)
     for c in range(c_all):
         for i in range(h):
             for j in range(w):
-                mx = moments[0, c, i, j]
-                my = moments[1, c, i, j]
-                a1 = F(2) * mx * my + c1
-                a2 = F(2) * (moments[4, c, i, j] - mx * my) + c2
-                b1 = mx * mx + my * my + c1
-                b2 = moments[2, c, i, j] - mx * mx + moments[3, c, i, j] - my * my + c2
+                mx, my, a1, a2, b1, b2 = _terms(moments, c, i, j)
                 s = k * (a1 * a2) / (b1 * b2)
                 d_mx[i, j] = s * (F(2) * my / a1 - F(2) * my / a2 - F(2) * mx / b1 + F(2) * mx / b2)
                 d_exx[i, j] = -s / b2
