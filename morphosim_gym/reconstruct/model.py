@@ -130,6 +130,15 @@ class DynamicGaussians(nn.Module):
         self.skin_nodes = torch.as_tensor(nodes, dtype=torch.long)
         self.skin_weights = torch.as_tensor(weights, dtype=torch.float32)
         self.bound = (self.skin_nodes >= 0).any(dim=1)
+        # what `warp` reads of the binding, once per binding: the bound rows, each one's weight on
+        # every node [B, K] (a few nodes per moving object: dense products beat gathering [B, M]
+        # node transforms and scattering their gradients back) and its first node
+        rows = torch.nonzero(self.bound).reshape(-1)
+        nodes = self.skin_nodes.index_select(0, rows).clamp(min=0)
+        self._bound_rows = rows
+        self._bound_first = nodes[:, 0]
+        self._bound_dense = torch.zeros(len(rows), self.node_quats.shape[1]).scatter_add_(
+            1, nodes, self.skin_weights.index_select(0, rows))
 
     # ----------------------------------------------------------- properties
     @property
@@ -157,18 +166,17 @@ class DynamicGaussians(nn.Module):
         q = self.node_quats[frame] / self.node_quats[frame].norm(dim=-1, keepdim=True)   # [K, 4]
         R = quat_to_rotmat(q)                                                            # [K, 3, 3]
         tr = self.node_trans[frame]                                                      # [K, 3]
-        idx = self.skin_nodes[self.bound].clamp(min=0)                                   # [B, M]
-        w = self.skin_weights[self.bound]                                                # [B, M]
-        m = self.means[self.bound]
-        moved = torch.einsum("bmij,bj->bmi", gather_rows(R, idx), m) + gather_rows(tr, idx)  # [B, M, 3]
-        means = self.means.clone()
-        means[self.bound] = (w[..., None] * moved).sum(1)
-        qb = gather_rows(q, idx)                                                         # [B, M, 4]
-        sign = torch.where((qb * qb[:, :1]).sum(-1, keepdim=True) < 0, -1.0, 1.0)
-        blend = (w[..., None] * sign * qb).sum(1)
+        rows, dense = self._bound_rows, self._bound_dense                               # [B], [B, K]
+        blended = dense @ torch.cat([R.reshape(-1, 9), tr], dim=1)                       # [B, 12]
+        m = self.means.index_select(0, rows)
+        moved = (blended[:, :9].reshape(-1, 3, 3) * m[:, None, :]).sum(-1) + blended[:, 9:]
+        means = self.means.index_copy(0, rows, moved)
+        # each node's quaternion on the side of the Gaussian's first node's (q and -q are one rotation)
+        with torch.no_grad():
+            sign = torch.where(q @ q.T < 0, -1.0, 1.0).index_select(0, self._bound_first)  # [B, K]
+        blend = (dense * sign) @ q
         blend = blend / blend.norm(dim=-1, keepdim=True)
-        quats = self.quats.clone()
-        quats[self.bound] = quat_mul(blend, self.quats[self.bound])
+        quats = self.quats.index_copy(0, rows, quat_mul(blend, self.quats.index_select(0, rows)))
         return means, quats
 
     def points_at(self, points: torch.Tensor, nodes: torch.Tensor, weights: torch.Tensor, frame: int) -> torch.Tensor:

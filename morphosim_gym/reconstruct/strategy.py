@@ -60,9 +60,8 @@ def accumulate(state: dict, model: DynamicGaussians, footprint: torch.Tensor) ->
     if g is None:
         return
     n = g.norm(dim=-1) / footprint.clamp(min=1e-6)
-    seen = n > 0
-    state["grad"][seen] += n[seen]
-    state["count"][seen] += 1
+    state["grad"] += n                                   # 0 where the step did not see a Gaussian
+    state["count"] += (n > 0).to(state["count"].dtype)
 
 
 def _edit_params(model: DynamicGaussians, optimizer: torch.optim.Optimizer, keep: torch.Tensor,

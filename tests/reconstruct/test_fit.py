@@ -169,3 +169,34 @@ def test_max_footprints_must_be_at_least_one(bad):
 
     with pytest.raises(ValueError, match="max_footprints"):
         Strategy(max_footprints=bad)
+
+
+def test_the_fit_warp_is_the_scenes_skinning():
+    """The fit moves Gaussians (`DynamicGaussians.warp`) exactly as the fitted scene will
+    (`Motion.apply` of the exported parts): two objects with their own nodes, a static one, node
+    rotations far apart and quaternions of both signs (q and -q, one rotation, must blend alike)."""
+    from morphosim_gym.reconstruct.model import DynamicGaussians
+    from morphosim_gym.scene.rotations import quat_to_matrix
+
+    rng = np.random.default_rng(3)
+    n, frames = 3000, 2
+    objects = rng.integers(0, 3, n).astype(np.int32)          # object 2 has no nodes: static
+    node_objects = np.array([0, 0, 0, 1, 1], np.int32)
+    nodes = rng.normal(size=(5, 3))
+    q = rng.normal(size=(frames, 5, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    rot = quat_to_matrix(q)
+    trans = rng.normal(scale=0.3, size=(frames, 5, 3))
+    model = DynamicGaussians(rng.normal(size=(n, 3)), rng.normal(size=(n, 4)), np.full((n, 3), 0.05),
+                             np.full(n, 0.5), np.full((n, 3), 0.5), objects, nodes, node_objects, rot, trans)
+    with torch.no_grad():
+        model.node_quats[1, ::2] *= -1.0                     # the same rotations, the other sign
+    parts, motion = model.to_scene_parts()
+    assert (objects == 2).sum() > 0 and not model.bound[torch.from_numpy(objects == 2)].any()
+    for t in range(frames):
+        means, quats = model.warp(t)
+        want_m, want_q = motion.apply(parts.means.astype(np.float64), parts.quats.astype(np.float64), t)
+        got_q = quats.detach().numpy() / np.linalg.norm(quats.detach().numpy(), axis=-1, keepdims=True)
+        want_q = want_q / np.linalg.norm(want_q, axis=-1, keepdims=True)
+        assert np.abs(means.detach().numpy() - want_m).max() < 1e-5
+        assert np.minimum(np.abs(got_q - want_q).max(-1), np.abs(got_q + want_q).max(-1)).max() < 1e-5
