@@ -216,7 +216,7 @@ def fit(model: DynamicGaussians, clip: GeneratedClip, reference: dict[int, int],
         if model.node_trans.shape[1]:
             groups += [{"params": [model.node_trans], "lr": cfg.lr_node_trans * scene_depth, "name": "node_trans"},
                        {"params": [model.node_quats], "lr": cfg.lr_node_quats, "name": "node_quats"}]
-        return torch.optim.Adam(groups, eps=1e-15)
+        return torch.optim.Adam(groups, eps=1e-15, fused=True)   # one compiled step for all groups (4x the default loop)
 
     optimizer = make_optimizer()
     state = initialize_state(model)

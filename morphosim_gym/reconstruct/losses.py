@@ -50,6 +50,18 @@ def conv_ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     return 1.0 - s.mean()
 
 
+def _where(mask: torch.Tensor) -> torch.Tensor | None:
+    """The flat indices of a boolean mask's True pixels (None when there are none). Select them
+    with `_pick` (`index_select`, whose backward sums in index order): one `nonzero` per mask,
+    where boolean indexing runs one per selected tensor and another in its backward."""
+    idx = torch.nonzero(mask.reshape(-1)).reshape(-1)
+    return idx if len(idx) else None
+
+
+def _pick(x: torch.Tensor, idx: torch.Tensor) -> torch.Tensor:
+    return x.reshape(-1).index_select(0, idx)
+
+
 def photometric_loss(pred: torch.Tensor, target: torch.Tensor, ssim_weight: float = 0.2) -> torch.Tensor:
     """(1 - w) L1 + w (1 - SSIM)."""
     return (1 - ssim_weight) * (pred - target).abs().mean() + ssim_weight * ssim_loss(pred, target)
@@ -61,12 +73,13 @@ def depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torch.Tensor, tr
     `trim` > 0 the largest `trim` fraction of the errors is left out (a trimmed mean: an imperfect
     prior's outliers, such as a wrong object depth or a mask a pixel off, do not pull the fit);
     `weight` [H, W] scales each pixel's error (its confidence)."""
-    valid = (target > 0) & (alpha.detach() > 0.5)
-    if not valid.any():
+    idx = _where((target > 0) & (alpha.detach() > 0.5))
+    if idx is None:
         return pred.sum() * 0.0
-    err = (pred[valid] - target[valid]).abs() / target[valid]
+    t = _pick(target, idx)
+    err = (_pick(pred, idx) - t).abs() / t
     if weight is not None:
-        err = err * weight[valid]
+        err = err * _pick(weight, idx)
     if trim > 0 and err.numel() > 10:
         keep = max(1, int(round(err.numel() * (1.0 - trim))))
         err = torch.topk(err, keep, largest=False, sorted=False).values
@@ -83,33 +96,36 @@ def scale_shift_depth_loss(pred: torch.Tensor, target: torch.Tensor, alpha: torc
     scale, which an estimated depth often gets wrong per object. Pixels without a prior or
     mostly transparent are left out; groups under `min_pixels` pixels too. `weight` [H, W] are
     per-pixel confidences."""
-    valid = (target > 0) & (alpha.detach() > 0.5) & (groups >= 0)
-    if not valid.any():
+    idx = _where((target > 0) & (alpha.detach() > 0.5) & (groups >= 0))
+    if idx is None:
         return pred.sum() * 0.0
-    w_all = weight if weight is not None else torch.ones_like(target)
-    terms, counts = [], []
-    for g in torch.unique(groups[valid]).tolist():
-        sel = valid & (groups == g)
-        n = int(sel.sum())
-        if n < min_pixels:
-            continue
-        x, y, w = target[sel], pred[sel], w_all[sel].to(pred.dtype)
-        with torch.no_grad():
-            yd = y.detach()
-            sw = w.sum().clamp(min=1e-9)
-            mx, my = (w * x).sum() / sw, (w * yd).sum() / sw
-            vx = (w * (x - mx) ** 2).sum() / sw
-            scale = ((w * (x - mx) * (yd - my)).sum() / sw / vx).clamp(0.2, 5.0) if vx > 1e-10 else torch.ones(())
-            shift = my - scale * mx
-            ref = my.abs().clamp(min=1e-6)
-        r = (y - (scale * x + shift)).abs() / ref
-        hub = torch.where(r < delta, 0.5 * r * r / delta, r - 0.5 * delta)
-        terms.append((hub * w).sum() / w.sum().clamp(min=1e-9))
-        counts.append(n)
-    if not terms:
+    # every group at once: per-group sums by index_add over the valid pixels' group ids (small
+    # integers: an id no pixel has is a group of 0 pixels, which weighs nothing)
+    inv = _pick(groups, idx).long()
+    count = torch.bincount(inv)
+    kept = count >= min_pixels
+    if not kept.any():
         return pred.sum() * 0.0
-    c = torch.tensor(counts, dtype=pred.dtype)
-    return (torch.stack(terms) * c).sum() / c.sum()
+    x, y = _pick(target, idx), _pick(pred, idx)
+    w = (_pick(weight, idx) if weight is not None else torch.ones_like(x)).to(pred.dtype)
+
+    def per_group(v: torch.Tensor) -> torch.Tensor:
+        return torch.zeros(len(count), dtype=v.dtype).index_add(0, inv, v)
+
+    with torch.no_grad():
+        yd = y.detach()
+        sw = per_group(w).clamp(min=1e-9)
+        mx, my = per_group(w * x) / sw, per_group(w * yd) / sw
+        dx = x - mx[inv]
+        vx = per_group(w * dx ** 2) / sw
+        cov = per_group(w * dx * (yd - my[inv])) / sw
+        scale = torch.where(vx > 1e-10, (cov / vx.clamp(min=1e-10)).clamp(0.2, 5.0), torch.ones_like(vx))
+        shift = my - scale * mx
+        ref = my.abs().clamp(min=1e-6)
+    r = (y - (scale[inv] * x + shift[inv])).abs() / ref[inv]
+    hub = torch.where(r < delta, 0.5 * r * r / delta, r - 0.5 * delta)
+    c = torch.where(kept, count, 0).to(pred.dtype)          # groups under min_pixels weigh 0
+    return (per_group(hub * w) / sw * c).sum() / c.sum()
 
 
 def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None,
@@ -122,9 +138,10 @@ def mask_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tens
         err = err * weight
     if valid is None:
         return err.mean()
-    if not valid.any():
+    idx = _where(valid)
+    if idx is None:
         return soft.sum() * 0.0
-    return err[valid].mean()
+    return _pick(err, idx).mean()
 
 
 def mask_iou_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.Tensor | None = None,
@@ -147,17 +164,19 @@ def mask_iou_loss(soft: torch.Tensor, target_onehot: torch.Tensor, valid: torch.
     present = present_mask & (target_onehot.sum(dim=(0, 1)) > 0)
     if not present.any():
         return soft.sum() * 0.0
-    s, t = soft.clamp(0.0, 1.0)[..., present], target_onehot[..., present]
-    inter = torch.minimum(s, t).sum(dim=(0, 1))
-    union = torch.maximum(s, t).sum(dim=(0, 1)).clamp(min=1e-6)
-    return (1.0 - inter / union).mean()
+    s = soft.clamp(0.0, 1.0)
+    inter = torch.minimum(s, target_onehot).sum(dim=(0, 1))
+    union = torch.maximum(s, target_onehot).sum(dim=(0, 1)).clamp(min=1e-6)
+    weight = present.to(soft.dtype)                         # the mean over the instances present
+    return ((1.0 - inter / union) * weight).sum() / weight.sum()
 
 
 def empty_alpha_loss(alpha: torch.Tensor, empty: torch.Tensor) -> torch.Tensor:
     """Mean opacity over the pixels where the prior says nothing is drawn."""
-    if not empty.any():
+    idx = _where(empty)
+    if idx is None:
         return alpha.sum() * 0.0
-    return alpha[empty].mean()
+    return _pick(alpha, idx).mean()
 
 
 def track_loss(pred_uv: torch.Tensor, target_uv: torch.Tensor, visible: torch.Tensor, size: float,

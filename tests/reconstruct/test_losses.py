@@ -76,3 +76,42 @@ def test_scale_shift_depth_is_blind_to_scale_and_shift_only():
     two = torch.where(g2 == 1, 3.0 * rows, rows)
     assert scale_shift_depth_loss(rows, two, alpha, g2) == pytest.approx(0.0, abs=1e-6)
     assert scale_shift_depth_loss(rows, two, alpha, groups) > 0.01
+    # a group under min_pixels is left out: 4 pixels of another id that no scale fits
+    g3 = groups.clone()
+    g3[0, :4] = 5
+    odd = rows.clone()
+    odd[0, :4] = torch.tensor([9.0, 1.0, 9.0, 1.0])
+    assert scale_shift_depth_loss(rows, odd, alpha, g3, min_pixels=8) == pytest.approx(0.0, abs=1e-6)
+    assert scale_shift_depth_loss(rows, odd, alpha, g3, min_pixels=4) > 1e-3
+
+
+def test_scale_shift_depth_weighs_each_group_by_its_pixels():
+    """The loss against a plain loop over the groups (each group's weighted least-squares scale
+    and shift, a weighted mean Huber term, groups weighted by their pixel counts), with weights,
+    pixels left out and a group too small."""
+    from morphosim_gym.reconstruct.losses import scale_shift_depth_loss
+
+    gen = torch.Generator().manual_seed(0)
+    target = torch.rand(24, 24, generator=gen) * 4 + 1
+    target[torch.rand(24, 24, generator=gen) < 0.1] = 0                # no prior there
+    alpha = torch.rand(24, 24, generator=gen)
+    groups = torch.randint(-1, 3, (24, 24), generator=gen)
+    groups[0, :3] = 7                                                  # 3 pixels: under min_pixels
+    weight = torch.rand(24, 24, generator=gen)
+    pred = target * (1 + 0.2 * torch.randn(24, 24, generator=gen))
+    valid = (target > 0) & (alpha > 0.5) & (groups >= 0)
+    terms, counts = [], []
+    for g in torch.unique(groups[valid]).tolist():
+        sel = valid & (groups == g)
+        if sel.sum() < 8:
+            continue
+        x, y, w = target[sel].double(), pred[sel].double(), weight[sel].double()
+        mx, my = (w * x).sum() / w.sum(), (w * y).sum() / w.sum()
+        scale = ((w * (x - mx) * (y - my)).sum() / (w * (x - mx) ** 2).sum()).clamp(0.2, 5.0)
+        r = (y - (scale * x + my - scale * mx)).abs() / my.abs()
+        hub = torch.where(r < 0.05, 0.5 * r * r / 0.05, r - 0.025)
+        terms.append((hub * w).sum() / w.sum())
+        counts.append(float(sel.sum()))
+    want = sum(t * c for t, c in zip(terms, counts)) / sum(counts)
+    assert len(terms) == 3
+    assert scale_shift_depth_loss(pred, target, alpha, groups, weight=weight).item() == pytest.approx(want.item(), rel=1e-5)
