@@ -290,7 +290,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
     model.features = nn.Parameter(torch.as_tensor(init, dtype=torch.float32))
     decoders = nn.ModuleList([MLP(cfg.dim, e.dim, cfg.hidden) for e in encs])
     opt = torch.optim.Adam([{"params": [model.features], "lr": cfg.lr_features},
-                            {"params": decoders.parameters(), "lr": cfg.lr_decoders}])
+                            {"params": decoders.parameters(), "lr": cfg.lr_decoders}], fused=True)
     targets = {}
     start = time.perf_counter()
     if not 0 < cfg.resolution <= 1:
@@ -317,8 +317,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
             order = list(rng.permutation(T))
         t = int(order.pop())
         if t not in targets:
-            targets[t] = [tuple(torch.from_numpy(np.ascontiguousarray(a[rows][:, cols])) for a in e.encode(clip, t))
-                          for e in encs]
+            targets[t] = [tuple(torch.from_numpy(_at_pixels(a, rows, cols)) for a in e.encode(clip, t)) for e in encs]
         with torch.no_grad():
             means, quats = model.warp(t)
         out = rasterize(means.detach(), quats.detach(), scales, opac, colors, viewmats[t:t + 1], Ks[t:t + 1], Wf, Hf,
@@ -346,6 +345,15 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
     exported = {e.name: dec.export(e.name, e.normalize) for e, dec in zip(encs, decoders)}
     return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations,
                       "filled": filled}
+
+
+def _at_pixels(a: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """An encoder's map [H, W, ...] at these rows and columns, C-contiguous: the map itself at full
+    resolution (a per-pixel embedding map is tens of MB a frame: no copies), else one gather."""
+    if len(rows) == a.shape[0] and len(cols) == a.shape[1] and (rows == np.arange(len(rows))).all() \
+            and (cols == np.arange(len(cols))).all():
+        return np.ascontiguousarray(a)
+    return np.ascontiguousarray(a[rows[:, None], cols[None, :]])
 
 
 def _fill_unseen(model: DynamicGaussians, reached: np.ndarray, k: int, frame: int, floor: float = 1e-3) -> int:

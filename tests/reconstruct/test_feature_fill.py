@@ -41,3 +41,17 @@ def test_nothing_to_fill_changes_nothing():
     assert _fill_unseen(model, np.ones(model.num), k=4, frame=0) == 0
     assert _fill_unseen(model, np.zeros(model.num), k=4, frame=0) == 0       # no supervision at all: nothing to copy
     np.testing.assert_array_equal(model.features.detach().numpy(), before)
+
+
+def test_encoder_maps_at_reduced_resolution():
+    """The feature targets at the reduced pixels: the map itself at full resolution (no copy of a
+    per-pixel embedding map), the pixels under each reduced pixel's centre otherwise."""
+    from morphosim_gym.reconstruct.features import _at_pixels
+
+    a = np.arange(6 * 8 * 2, dtype=np.float32).reshape(6, 8, 2)
+    full = _at_pixels(a, np.arange(6), np.arange(8))
+    assert full is a
+    rows, cols = np.array([0, 2, 5]), np.array([1, 1, 7])
+    got = _at_pixels(a, rows, cols)
+    assert got.flags.c_contiguous and np.array_equal(got, a[rows][:, cols])
+    assert np.array_equal(_at_pixels(a[..., 0], rows, cols), a[rows][:, cols][..., 0])
