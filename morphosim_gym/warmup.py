@@ -78,6 +78,15 @@ def _skinning() -> None:
     large.at(0.3)
 
 
+def _fit_ssim() -> None:
+    import torch
+
+    from morphosim_gym.reconstruct.fused_ssim import fused_ssim_loss
+
+    pred = torch.rand(24, 32, 3).requires_grad_(True)
+    fused_ssim_loss(pred, torch.rand(24, 32, 3)).backward()
+
+
 def _env(env_id: str) -> Callable[[], None]:
     def run() -> None:
         import gymnasium as gym
@@ -98,6 +107,7 @@ STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("render: forward float32, with and without features", _render_forward),
     ("render: backward (fitting)", _render_backward),
     ("scene motion: skinning, one chunk and parallel", _skinning),
+    ("reconstruct: the fit's SSIM loss, forward and backward", _fit_ssim),
     ("env MorphoSim/Track-v0: reset + step", _env("MorphoSim/Track-v0")),
     ("env MorphoSim/Reach-v0: reset + step (arm skin)", _env("MorphoSim/Reach-v0")),
     ("env MorphoSim/Find-v0: reset + step", _env("MorphoSim/Find-v0")),
