@@ -21,20 +21,22 @@ import torch
 
 from ..render.cpu._jit import jit
 
-__all__ = ["fused_ssim_loss", "fused_ssim_applies", "WINDOW_RADIUS", "WINDOW_SIGMA"]
+__all__ = ["fused_ssim_loss", "fused_ssim_applies", "window_taps", "WINDOW_RADIUS", "WINDOW_SIGMA"]
 
 WINDOW_RADIUS = 5
 WINDOW_SIGMA = 1.5
 _C1, _C2 = 0.01 ** 2, 0.03 ** 2
 
 
-def _taps(dtype: np.dtype) -> np.ndarray:
+def window_taps(dtype: np.dtype) -> np.ndarray:
+    """The SSIM window's 1D taps (normalised Gaussian, `WINDOW_SIGMA`, 2 `WINDOW_RADIUS` + 1 taps); the
+    2D window is their outer product."""
     x = np.arange(-WINDOW_RADIUS, WINDOW_RADIUS + 1, dtype=np.float64)
     g = np.exp(-(x ** 2) / (2 * WINDOW_SIGMA ** 2))
     return (g / g.sum()).astype(dtype)
 
 
-_TAPS = {np.dtype(np.float32): _taps(np.dtype(np.float32)), np.dtype(np.float64): _taps(np.dtype(np.float64))}
+_TAPS = {np.dtype(np.float32): window_taps(np.dtype(np.float32)), np.dtype(np.float64): window_taps(np.dtype(np.float64))}
 
 
 @jit
@@ -82,6 +84,16 @@ def _blur(src, dst, tmp, g):
 
 
 @jit
+def _blur_product(a, b, dst, prod, tmp, g):
+    """dst = blur(a * b) of two [H, W] arrays (`prod`, `tmp`: scratch)."""
+    h, w = a.shape
+    for i in range(h):
+        for j in range(w):
+            prod[i, j] = a[i, j] * b[i, j]
+    _blur(prod, dst, tmp, g)
+
+
+@jit
 def _terms(moments, c, i, j):
     """(mx, my, 2 mx my + c1, 2 sxy + c2, mx^2 + my^2 + c1, sxx + syy + c2) at one pixel."""
     F = moments.dtype.type
@@ -102,18 +114,9 @@ def _forward(x, y, g, moments, tmp, prod):
     for c in range(c_all):
         _blur(x[c], moments[0, c], tmp, g)
         _blur(y[c], moments[1, c], tmp, g)
-        for i in range(h):
-            for j in range(w):
-                prod[i, j] = x[c, i, j] * x[c, i, j]
-        _blur(prod, moments[2, c], tmp, g)
-        for i in range(h):
-            for j in range(w):
-                prod[i, j] = y[c, i, j] * y[c, i, j]
-        _blur(prod, moments[3, c], tmp, g)
-        for i in range(h):
-            for j in range(w):
-                prod[i, j] = x[c, i, j] * y[c, i, j]
-        _blur(prod, moments[4, c], tmp, g)
+        _blur_product(x[c], x[c], moments[2, c], prod, tmp, g)
+        _blur_product(y[c], y[c], moments[3, c], prod, tmp, g)
+        _blur_product(x[c], y[c], moments[4, c], prod, tmp, g)
         for i in range(h):
             for j in range(w):
                 mx, my, a1, a2, b1, b2 = _terms(moments, c, i, j)

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .fused_ssim import fused_ssim_applies, fused_ssim_loss
+from .fused_ssim import WINDOW_RADIUS, fused_ssim_applies, fused_ssim_loss, window_taps
 from .model import gather_rows
 
 __all__ = ["ssim_loss", "conv_ssim_loss", "photometric_loss", "depth_loss", "scale_shift_depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
@@ -17,11 +18,9 @@ _WINDOWS: dict[tuple, torch.Tensor] = {}
 def _window(channels: int, dtype: torch.dtype) -> torch.Tensor:
     key = (channels, dtype)
     if key not in _WINDOWS:
-        x = torch.arange(11, dtype=torch.float64) - 5
-        g = torch.exp(-(x ** 2) / (2 * 1.5 ** 2))
-        g = g / g.sum()
+        g = torch.from_numpy(window_taps(np.dtype(np.float64)))
         w = (g[:, None] * g[None, :]).to(dtype)
-        _WINDOWS[key] = w.expand(channels, 1, 11, 11).contiguous()
+        _WINDOWS[key] = w.expand(channels, 1, len(g), len(g)).contiguous()
     return _WINDOWS[key]
 
 
@@ -40,11 +39,11 @@ def conv_ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     y = b.permute(2, 0, 1)[None]
     c = x.shape[1]
     w = _window(c, x.dtype)
-    mx = F.conv2d(x, w, padding=5, groups=c)
-    my = F.conv2d(y, w, padding=5, groups=c)
-    sxx = F.conv2d(x * x, w, padding=5, groups=c) - mx * mx
-    syy = F.conv2d(y * y, w, padding=5, groups=c) - my * my
-    sxy = F.conv2d(x * y, w, padding=5, groups=c) - mx * my
+    mx = F.conv2d(x, w, padding=WINDOW_RADIUS, groups=c)
+    my = F.conv2d(y, w, padding=WINDOW_RADIUS, groups=c)
+    sxx = F.conv2d(x * x, w, padding=WINDOW_RADIUS, groups=c) - mx * mx
+    syy = F.conv2d(y * y, w, padding=WINDOW_RADIUS, groups=c) - my * my
+    sxy = F.conv2d(x * y, w, padding=WINDOW_RADIUS, groups=c) - mx * my
     c1, c2 = 0.01 ** 2, 0.03 ** 2
     s = ((2 * mx * my + c1) * (2 * sxy + c2)) / ((mx * mx + my * my + c1) * (sxx + syy + c2))
     return 1.0 - s.mean()

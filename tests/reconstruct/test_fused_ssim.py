@@ -74,3 +74,13 @@ def test_bad_input_is_named():
         fused_ssim_loss(pred, target[:, :4])
     with pytest.raises(ValueError, match="images of one shape"):
         fused_ssim_loss(pred[..., 0], target[..., 0])
+
+
+def test_the_window_is_the_standard_ssim_gaussian():
+    """11 taps, sigma 1.5, normalised (both formulations read these taps)."""
+    from morphosim_gym.reconstruct.fused_ssim import window_taps
+
+    x = np.arange(-5, 6)
+    want = np.exp(-(x ** 2) / (2 * 1.5 ** 2))
+    assert np.allclose(window_taps(np.dtype(np.float64)), want / want.sum(), rtol=1e-14)
+    assert window_taps(np.dtype(np.float32)).dtype == np.float32
