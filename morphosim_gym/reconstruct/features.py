@@ -34,7 +34,7 @@ from ..render import rasterize
 from ..scene import INSTANCE_DIM, FeatureDecoder, GeneratedClip, instance_codes
 from .model import DynamicGaussians
 
-__all__ = ["PixelEncoder", "LabelEmbeddingEncoder", "InstanceCodeEncoder", "ColorEncoder", "ClipImageEncoder", "FeatureConfig",
+__all__ = ["PixelEncoder", "IndexedPixelEncoder", "LabelEmbeddingEncoder", "InstanceCodeEncoder", "ColorEncoder", "ClipImageEncoder", "FeatureConfig",
            "distill_features", "MLP"]
 
 
@@ -48,6 +48,30 @@ class PixelEncoder(Protocol):
     def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
         """(features [H, W, dim] float32, valid [H, W] bool) of a frame."""
         ...
+
+
+class IndexedPixelEncoder(PixelEncoder, Protocol):
+    """An encoder whose pixels take one of a few vectors (one per instance of the masks): the
+    distillation keeps each frame as an index map and a table, not as a dense [H, W, dim] map
+    (a 384-dim sentence embedding per pixel is 25 MB a 128 px frame, 1.2 GB for 49 frames)."""
+
+    def encode_indexed(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(index [H, W] int64, table [K, dim] float32, valid [H, W] bool): pixel (r, c)'s
+        feature is table[index[r, c]]; `encode` gives table[index]."""
+        ...
+
+
+def _indexed(masks: np.ndarray, vectors: dict[int, np.ndarray], dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """(index [H, W], table [K + 1, dim]) of an instance map: row 0 of the table is zeros (pixels
+    whose instance has no vector), row k + 1 the vector of the k-th instance in sorted order."""
+    ids = np.array(sorted(vectors), np.int64)
+    table = np.zeros((len(ids) + 1, dim), np.float32)
+    if len(ids) == 0:
+        return np.zeros(masks.shape, np.int64), table
+    table[1:] = np.stack([vectors[int(i)] for i in ids])
+    pos = np.clip(np.searchsorted(ids, masks), 0, len(ids) - 1)
+    index = np.where(ids[pos] == masks, pos + 1, 0).astype(np.int64)
+    return index, table
 
 
 class LabelEmbeddingEncoder:
@@ -70,15 +94,17 @@ class LabelEmbeddingEncoder:
             self._table.update({i: v for i, v in zip(missing, vecs)})
         return self._table
 
-    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+    def encode_indexed(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if clip.masks is None:
             raise ValueError("Expected a clip with instance masks for the semantic encoder, found none")
-        table = self._vectors(clip)
+        vectors = self._vectors(clip)
         m = clip.masks[frame]
-        out = np.zeros(m.shape + (self.dim,), np.float32)
-        for inst, vec in table.items():
-            out[m == inst] = vec
-        return out, m >= 0
+        index, table = _indexed(m, {i: vectors[i] for i in clip.labels}, self.dim)
+        return index, table, m >= 0
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        index, table, valid = self.encode_indexed(clip, frame)
+        return table[index], valid
 
 
 class InstanceCodeEncoder:
@@ -88,15 +114,17 @@ class InstanceCodeEncoder:
     normalize = True
     dim = INSTANCE_DIM
 
-    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+    def encode_indexed(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if clip.masks is None:
             raise ValueError("Expected a clip with instance masks for the instance encoder, found none")
         m = clip.masks[frame]
-        ids = np.unique(m[m >= 0])
-        out = np.zeros(m.shape + (self.dim,), np.float32)
-        for inst, code in zip(ids.tolist(), instance_codes(ids.tolist(), self.dim)):
-            out[m == inst] = code
-        return out, m >= 0
+        ids = np.unique(m[m >= 0]).tolist()
+        index, table = _indexed(m, dict(zip(ids, instance_codes(ids, self.dim))), self.dim)
+        return index, table, m >= 0
+
+    def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        index, table, valid = self.encode_indexed(clip, frame)
+        return table[index], valid
 
 
 class ColorEncoder:
@@ -259,8 +287,8 @@ def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Seq
         with np.errstate(invalid="ignore"):
             c, r = np.floor(uv[:, 0]), np.floor(uv[:, 1])
             ok = (z > clip.cameras[t].near) & (c >= 0) & (c < W) & (r >= 0) & (r < H)
-        encoded = [e.encode(clip, t) for e in from_masks]
-        valid = encoded[0][1]
+        encoded = [_FrameTarget.encode(e, clip, t) for e in from_masks]
+        valid = encoded[0].valid
         idx = np.flatnonzero(ok)
         ci, ri = c[idx].astype(int), r[idx].astype(int)
         if clip.depth is not None:                  # visible there: at the depth prior's depth
@@ -269,8 +297,8 @@ def _initial_latents(model: DynamicGaussians, clip: GeneratedClip, encoders: Seq
         else:
             valid_here = valid[ri, ci]
         idx, ci, ri = idx[valid_here], ci[valid_here], ri[valid_here]
-        for (feat, _), proj in zip(encoded, projs):
-            code[idx] += feat[ri, ci].astype(np.float64) @ proj
+        for target, proj in zip(encoded, projs):
+            code[idx] += target.at(ri * W + ci).astype(np.float64) @ proj
         hits[idx] += 1
         seen[idx] = True
     code[seen] /= hits[seen, None]
@@ -317,7 +345,7 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
             order = list(rng.permutation(T))
         t = int(order.pop())
         if t not in targets:
-            targets[t] = [tuple(torch.from_numpy(_at_pixels(a, rows, cols)) for a in e.encode(clip, t)) for e in encs]
+            targets[t] = [_FrameTarget.encode(e, clip, t, rows, cols).as_torch() for e in encs]
         with torch.no_grad():
             means, quats = model.warp(t)
         out = rasterize(means.detach(), quats.detach(), scales, opac, colors, viewmats[t:t + 1], Ks[t:t + 1], Wf, Hf,
@@ -325,14 +353,14 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
         fmap = out["features"][0]                                               # [H, W, D]
         alpha = out["alpha"][0].detach()
         loss = fmap.sum() * 0.0
-        for dec, (target, valid) in zip(decoders, targets[t]):
-            idx = torch.nonzero((valid & (alpha > 0.5)).reshape(-1)).squeeze(1)
+        for dec, target in zip(decoders, targets[t]):
+            idx = torch.nonzero((target.valid & (alpha > 0.5)).reshape(-1)).squeeze(1)
             if cfg.pixels and len(idx) > cfg.pixels:
                 idx = idx[torch.from_numpy(rng.choice(len(idx), cfg.pixels, replace=False))]
             if len(idx):
                 f = fmap.reshape(-1, fmap.shape[-1])[idx] / alpha.reshape(-1)[idx][:, None]   # alpha-normalised
                 pred = dec(f)
-                loss = loss + ((pred - target.reshape(-1, target.shape[-1])[idx]) ** 2).mean()
+                loss = loss + ((pred - target.at(idx)) ** 2).mean()
         opt.zero_grad(set_to_none=True)
         loss.backward()
         if cfg.fill_unseen and model.features.grad is not None:
@@ -345,6 +373,36 @@ def distill_features(model: DynamicGaussians, clip: GeneratedClip, config: Featu
     exported = {e.name: dec.export(e.name, e.normalize) for e, dec in zip(encs, decoders)}
     return exported, {"loss": losses, "seconds": time.perf_counter() - start, "iterations": cfg.iterations,
                       "filled": filled}
+
+
+@dataclass(frozen=True)
+class _FrameTarget:
+    """One encoder's targets for one frame, flat over its pixels: `values` [P, dim] (`index` None)
+    or a table [K, dim] with each pixel's row in `index` [P] (an `IndexedPixelEncoder`); `valid`
+    [H, W]. Numpy arrays, or torch tensors after `as_torch`."""
+
+    values: np.ndarray | torch.Tensor
+    index: np.ndarray | torch.Tensor | None
+    valid: np.ndarray | torch.Tensor
+
+    @classmethod
+    def encode(cls, encoder: PixelEncoder, clip: GeneratedClip, frame: int, rows: np.ndarray | None = None,
+               cols: np.ndarray | None = None) -> "_FrameTarget":
+        """The encoder's targets of a frame at these rows and columns (None: every pixel)."""
+        rows = np.arange(clip.height) if rows is None else rows
+        cols = np.arange(clip.width) if cols is None else cols
+        if hasattr(encoder, "encode_indexed"):
+            index, table, valid = encoder.encode_indexed(clip, frame)
+            return cls(np.ascontiguousarray(table), _at_pixels(index, rows, cols).reshape(-1), _at_pixels(valid, rows, cols))
+        feat, valid = encoder.encode(clip, frame)
+        return cls(_at_pixels(feat, rows, cols).reshape(-1, feat.shape[-1]), None, _at_pixels(valid, rows, cols))
+
+    def as_torch(self) -> "_FrameTarget":
+        return _FrameTarget(*(None if a is None else torch.from_numpy(a) for a in (self.values, self.index, self.valid)))
+
+    def at(self, pixels: np.ndarray | torch.Tensor) -> np.ndarray | torch.Tensor:
+        """[n, dim] targets of these flat pixel indices."""
+        return self.values[pixels] if self.index is None else self.values[self.index[pixels]]
 
 
 def _at_pixels(a: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
