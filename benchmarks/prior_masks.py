@@ -10,7 +10,7 @@ estimated mask against the generator's mask of the same name (IoU, mean over the
 object shows at least 4 pixels). Seconds to run, not minutes: the quick check before a full
 `benchmarks/reconstruct.py --priors estimated` run, whose instance IoU follows these masks.
 `--compare STAGE` also scores the masks with that stage of `RGBPriorEstimators` switched off
-(`colour_refine`, `skyline`, `rims`, `motion_split`).
+(`colour_refine`, `skyline`, `rims`, `motion_split`, `sibling_shapes`).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=49)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--prompts-file", type=Path, default=None)
-    ap.add_argument("--compare", choices=("colour_refine", "skyline", "rims", "motion_split"), default=None,
+    ap.add_argument("--compare", choices=("colour_refine", "skyline", "rims", "motion_split", "sibling_shapes"), default=None,
                     help="also score the estimators with this stage switched off")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()

@@ -15,7 +15,8 @@ from .masks import box_masks, label_regions, motion_foreground, planned_boxes, s
 from .overlaps import split_by_motion
 from .protocol import BoxTrack
 from .rims import trim_rims
-from .siblings import depths_from_siblings
+from .shapes import split_by_shape
+from .siblings import base_name, depths_from_siblings
 from .sizes import ObjectSize, pixel_rows, size_depth
 from .skyline import horizon_rows, sky_region, sky_seam
 from .tracks import flow_tracks
@@ -48,6 +49,11 @@ class RGBPriorEstimators:
       Last, with a plan, each moving object's outline against the setting is trimmed to the
       pixels it covers at least half of (`rims.trim_rims`; `rims=False` skips it): masks from
       motion take every pixel the object touches, a rim of setting 1 px wide.
+      Then numbered instances of one planned object ("duck 1", "duck 2"), which move in step and
+      look alike, so that neither motion nor colour tells them apart, share out their pixels by
+      the one shape they share in their boxes (`shapes.split_by_shape`; `sibling_shapes=False`
+      skips it): three ducks in a row, estimated masks' IoU 0.17 / 0.58 / 0.29 -> 0.76 / 0.80 /
+      0.74; it costs siblings of two different looks (two cows 0.88 / 0.91 -> 0.77 / 0.87).
     - depth: the ground plane z = `ground_height` for the setting (the setting above the horizon:
       a backdrop as far as the farthest ground seen; the sky: 0); each object region gets the
       ground depth where its lowest pixels meet the ground (objects stand on the ground), or,
@@ -105,6 +111,7 @@ class RGBPriorEstimators:
         skyline: without `backdrop`, tell the sky from the setting by colour (see masks above).
         rims: trim a planned clip's moving objects' outlines (see masks above).
         motion_split: share out overlapping moving objects by their motion (see masks above).
+        sibling_shapes: share out numbered siblings by their shared shape (see masks above).
         walls: with `backdrop`, a wall where the setting's colour changes above the floor (see
             depth above); `prepare.default_estimators` turns it on in settings closed by walls.
             The mug clip's wall, 1.23-1.33 m away, is at 1.26-1.36 m with it, 22 m without. A
@@ -139,6 +146,7 @@ class RGBPriorEstimators:
     flat_tops: bool = False
     rims: bool = True
     motion_split: bool = True
+    sibling_shapes: bool = True
 
     def __post_init__(self) -> None:
         if self.far_heights is not None and not (np.isfinite(self.far_heights) and self.far_heights > 0):
@@ -200,7 +208,7 @@ class RGBPriorEstimators:
         for inst in np.unique(masks):
             if inst <= SETTING_ID:
                 continue
-            base = _base_name((labels or {}).get(int(inst), ""))
+            base = base_name((labels or {}).get(int(inst), ""))
             size = (sizes or {}).get(base)
             if size is not None and size.height < 0.2 * size.longest:
                 if not self.flat_tops:
@@ -270,6 +278,8 @@ class RGBPriorEstimators:
             ids = split_by_motion(f, ids, targets, self.box_margin)
         if self.rims and targets and setting.any():
             ids = np.stack([trim_rims(f[i], ids[i], range(1, len(targets) + 1), SETTING_ID) for i in range(t)])
+        if self.sibling_shapes and len(targets) > 1:
+            ids = split_by_shape(ids, targets)
         if setting.any():
             labels = {SETTING_ID: self.setting_label, **labels}
         present = set(np.unique(ids).tolist())
@@ -283,12 +293,6 @@ class RGBPriorEstimators:
 
     def tracks(self, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return flow_tracks(frames, self.track_spacing, self.fb_threshold)
-
-
-def _base_name(label: str) -> str:
-    """"sheep 2" -> "sheep" (numbered instances of one planned object share its size)."""
-    head, _, tail = label.rpartition(" ")
-    return head if head and tail.isdigit() else label
 
 
 def _lifted_by_own_scale(contact: np.ndarray, rows: np.ndarray, ratio: float, percentile: float = 5.0,

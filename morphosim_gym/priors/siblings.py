@@ -15,7 +15,13 @@ import numpy as np
 
 from .depth import below_lowest
 
-__all__ = ["hidden_share", "whole_width", "depths_from_siblings"]
+__all__ = ["base_name", "hidden_share", "whole_width", "depths_from_siblings"]
+
+
+def base_name(label: str) -> str:
+    """"sheep 2" -> "sheep": the planned object a numbered instance is one of (other labels as given)."""
+    head, _, tail = label.rpartition(" ")
+    return head if head and tail.isdigit() else label
 
 
 def hidden_share(mask: np.ndarray, others: np.ndarray) -> float:

@@ -115,7 +115,9 @@ def test_bad_input_names_the_problem():
 
 
 def test_two_white_sheep_side_by_side_are_told_apart_in_estimated_masks():
-    clip, on, off = with_and_without("two sheep walk across the field from left to right", "motion_split", 96, 25)
+    # the sibling-shape split would tell these two apart too (0.94 / 0.89 with the motion split off)
+    clip, on, off = with_and_without("two sheep walk across the field from left to right", "motion_split", 96, 25,
+                                     sibling_shapes=False)
 
     def sheep_iou(e):
         out = {}
