@@ -85,21 +85,22 @@ class LabelEmbeddingEncoder:
 
         self._emb = embeddings
         self.dim = embeddings.embedding_dim()
-        self._table: dict[int, np.ndarray] = {}
+        self._by_label: dict[str, np.ndarray] = {}
 
     def _vectors(self, clip: GeneratedClip) -> dict[int, np.ndarray]:
-        missing = [i for i in clip.labels if i not in self._table]
+        """Each of the clip's instance ids -> its label's embedding (embedded once per label, so
+        one encoder serves clips that number their instances differently)."""
+        missing = sorted({name for name in clip.labels.values() if name not in self._by_label})
         if missing:
-            vecs = self._emb.embed([clip.labels[i] for i in missing])
-            self._table.update({i: v for i, v in zip(missing, vecs)})
-        return self._table
+            self._by_label.update(zip(missing, self._emb.embed(missing)))
+        return {i: self._by_label[name] for i, name in clip.labels.items()}
 
     def encode_indexed(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if clip.masks is None:
             raise ValueError("Expected a clip with instance masks for the semantic encoder, found none")
         vectors = self._vectors(clip)
         m = clip.masks[frame]
-        index, table = _indexed(m, {i: vectors[i] for i in clip.labels}, self.dim)
+        index, table = _indexed(m, vectors, self.dim)
         return index, table, m >= 0
 
     def encode(self, clip: GeneratedClip, frame: int) -> tuple[np.ndarray, np.ndarray]:

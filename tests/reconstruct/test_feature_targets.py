@@ -44,6 +44,20 @@ def test_the_semantic_encoder_is_each_labels_embedding(clip):
     assert not feat[clip.masks[0] < 0].any()      # the sky (no instance): zeros
 
 
+def test_one_semantic_encoder_follows_each_clips_labels(clip):
+    """An encoder used for a second clip whose ids name other things gives that clip's labels."""
+    from dataclasses import replace
+
+    enc = LabelEmbeddingEncoder()
+    first, _ = enc.encode(clip, 0)
+    ids = sorted(clip.labels)
+    swapped = replace(clip, labels={i: clip.labels[j] for i, j in zip(ids, ids[::-1])})
+    second, _ = enc.encode(swapped, 0)
+    fresh, _ = LabelEmbeddingEncoder().encode(swapped, 0)
+    np.testing.assert_array_equal(second, fresh)
+    assert not np.array_equal(first, second)
+
+
 def test_the_instance_encoder_is_each_ids_code(clip):
     enc = InstanceCodeEncoder()
     index, table, valid = enc.encode_indexed(clip, 0)
