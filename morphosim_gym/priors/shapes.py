@@ -14,9 +14,9 @@ read off the frames without knowing who is who: where a sibling stands, the pixe
 another sibling happens to be there. So per sibling, the share of frames in which a cell of its
 box is foreground, and per cell the least of those shares over the siblings
 (`shared_shape`): near 1 where the object is, near 0 where at least one sibling's surroundings
-are clear. Then each foreground pixel that two or more siblings' boxes cover goes to the nearest
-sibling (the lowest box bottom: things stand or swim on the ground) whose shape, placed in its
-box, covers it with at least `threshold` (`split_by_shape`).
+are clear. Then each pixel of the group goes to the nearest sibling (the lowest box bottom: things
+stand or swim on the ground) whose shape, placed in its box, covers it with at least `threshold`;
+a pixel no placed shape covers keeps its id (`split_by_shape`).
 """
 
 from __future__ import annotations

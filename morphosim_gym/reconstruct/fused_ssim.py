@@ -21,11 +21,12 @@ import torch
 
 from ..render.cpu._jit import jit
 
-__all__ = ["fused_ssim_loss", "fused_ssim_applies", "window_taps", "WINDOW_RADIUS", "WINDOW_SIGMA"]
+__all__ = ["fused_ssim_loss", "fused_ssim_applies", "window_taps", "WINDOW_RADIUS", "WINDOW_SIGMA", "SSIM_C1",
+           "SSIM_C2"]
 
 WINDOW_RADIUS = 5
 WINDOW_SIGMA = 1.5
-_C1, _C2 = 0.01 ** 2, 0.03 ** 2
+SSIM_C1, SSIM_C2 = 0.01 ** 2, 0.03 ** 2          # the stabilising constants (images in [0, 1])
 
 
 def window_taps(dtype: np.dtype) -> np.ndarray:
@@ -99,10 +100,10 @@ def _terms(moments, c, i, j):
     F = moments.dtype.type
     mx = moments[0, c, i, j]
     my = moments[1, c, i, j]
-    a1 = F(2) * mx * my + F(_C1)
-    a2 = F(2) * (moments[4, c, i, j] - mx * my) + F(_C2)
-    b1 = mx * mx + my * my + F(_C1)
-    b2 = moments[2, c, i, j] - mx * mx + moments[3, c, i, j] - my * my + F(_C2)
+    a1 = F(2) * mx * my + F(SSIM_C1)
+    a2 = F(2) * (moments[4, c, i, j] - mx * my) + F(SSIM_C2)
+    b1 = mx * mx + my * my + F(SSIM_C1)
+    b2 = moments[2, c, i, j] - mx * mx + moments[3, c, i, j] - my * my + F(SSIM_C2)
     return mx, my, a1, a2, b1, b2
 
 

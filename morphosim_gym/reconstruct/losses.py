@@ -6,7 +6,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .fused_ssim import WINDOW_RADIUS, fused_ssim_applies, fused_ssim_loss, window_taps
+from .fused_ssim import SSIM_C1, SSIM_C2, WINDOW_RADIUS, fused_ssim_applies, fused_ssim_loss, window_taps
 from .model import gather_rows
 
 __all__ = ["ssim_loss", "conv_ssim_loss", "photometric_loss", "depth_loss", "scale_shift_depth_loss", "mask_loss", "mask_iou_loss", "empty_alpha_loss", "track_loss",
@@ -44,8 +44,7 @@ def conv_ssim_loss(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     sxx = F.conv2d(x * x, w, padding=WINDOW_RADIUS, groups=c) - mx * mx
     syy = F.conv2d(y * y, w, padding=WINDOW_RADIUS, groups=c) - my * my
     sxy = F.conv2d(x * y, w, padding=WINDOW_RADIUS, groups=c) - mx * my
-    c1, c2 = 0.01 ** 2, 0.03 ** 2
-    s = ((2 * mx * my + c1) * (2 * sxy + c2)) / ((mx * mx + my * my + c1) * (sxx + syy + c2))
+    s = ((2 * mx * my + SSIM_C1) * (2 * sxy + SSIM_C2)) / ((mx * mx + my * my + SSIM_C1) * (sxx + syy + SSIM_C2))
     return 1.0 - s.mean()
 
 
