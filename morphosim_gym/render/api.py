@@ -255,14 +255,14 @@ class PendingRender:
                 from .lod import lod_parts
 
                 parts = lod_parts(parts, cam.world_to_camera, cam.K, cam.near, self._lod_tol)
-            where = self._stage(parts, cam, np.zeros(3) if sky is not None else bg)
+            where = self._stage(parts, cam, np.zeros(3) if sky is not None else bg, sky)
         self._resolved.append(resolved)
         self._where.append(where)
 
-    def _stage(self, parts: list, cam: Camera, bg: np.ndarray) -> tuple:
+    def _stage(self, parts: list, cam: Camera, bg: np.ndarray, sky: Optional[np.ndarray]) -> tuple:
         """Stage a view's numpy Gaussian parts into the open batch (a new one when none is open or
-        it is full)."""
-        view = (cam.world_to_camera, cam.K, cam.near, cam.width, cam.height, bg)
+        it is full); its sky, if any, is composited by the thread that renders it."""
+        view = (cam.world_to_camera, cam.K, cam.near, cam.width, cam.height, bg, None if sky is None else (sky, cam))
         if self._batch is not None and self._batch.add_parts(parts, *view):
             return self._staged_into(parts, cam, self._batch.num_views - 1)
         if self._batch is not None:
@@ -351,7 +351,7 @@ class PendingRender:
             while j < hi and isinstance(self._where[j], tuple) and self._where[j][0] is batch:
                 j += 1
             dicts = self._helpers.partial(batch, k, k + (j - i), timeout_s)
-            out.extend(_batch_outputs(dicts, self._resolved[i:j]))
+            out.extend(_render_outputs(dicts))          # skies composited in the batch already
             i = j
         return out
 
@@ -463,6 +463,10 @@ def _batch_outputs(outs: list, resolved: list) -> list[RenderOutput]:
     for o, (_, cam, _, sky) in zip(outs, resolved):
         if sky is not None:          # as `render` does: the sky behind what the Gaussians leave uncovered
             o["rgb"] = _composite_sky(o["rgb"][None], o["alpha"][None], sky, [cam])[0]
+    return _render_outputs(outs)
+
+
+def _render_outputs(outs: list) -> list[RenderOutput]:
     return [RenderOutput(**{k: o.get(k) for k in _OUTPUT_KEYS}) for o in outs]
 
 

@@ -365,3 +365,25 @@ def test_a_helper_looking_for_the_next_batch_sees_a_post_and_reports_how_long_it
     _bump(posted, 0)
     assert _wait_posted(posted, 0, 1000) == 0
     assert _wait_posted(posted, 1, 1000) == -1
+
+
+@pytest.mark.parametrize("helpers", [0, 1, 2])
+def test_views_with_skies_are_composited_where_they_render_and_match(helpers):
+    # the thread that renders a view composites its sky (`sky.composite_view`): the same bits as
+    # `render_batch` and `render`, which composite after the render; views of different skies and
+    # none in one batch
+    rng = np.random.default_rng(5)
+    skies = [ms.scene.sky.check_sky(rng.random((16, 32, 3), dtype=np.float32)) for _ in range(2)]
+    views = [(g, cam, None, skies[i % 3]) if i % 3 < 2 else (g, cam, bg)
+             for i, (g, cam, bg) in enumerate(_views(_SPECS))]
+    ref = render_batch(views)
+    pool = RenderHelpers(helpers)
+    try:
+        got = submit_batch(views, helpers=pool).result()
+    finally:
+        pool.close()
+    for view, a, b in zip(views, got, ref):
+        _assert_same(a, b)
+        _assert_same(a, ms.render(view[0], view[1], background=view[2], sky=view[3] if len(view) == 4 else None))
+    shown = [np.mean(out.rgb[out.alpha < 0.5] > 0) for view, out in zip(views, got) if len(view) == 4]
+    assert min(shown) > 0.9                                  # the sky is there, behind uncovered pixels

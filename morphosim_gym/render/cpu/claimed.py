@@ -37,6 +37,7 @@ from .cull import cull_view
 from .forward import _raster_tiles
 from .pipeline import Workspace
 from .projection import _project_range
+from .sky import composite_view, sky_camera
 
 __all__ = ["ClaimedBatch", "RenderHelpers"]
 
@@ -66,11 +67,14 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
                  sizes,        # [V, 3] int64: width, height, tiles_x
                  nears,        # [V] float32
                  bgs,          # [V, 3]
+                 skies,        # [V, 3] int64: address, rows, columns of view v's sky image (float32 [H', W', 3]; 0: none)
+                 sky_cam,      # [V, 13] float64: view v's world-to-camera rotation (row-major), fx, fy, cx, cy
                  pix_off,      # [V + 1] int64
                  rec, trect,   # [N, 16], [4, N] shared scratch (view v writes only its own rows)
                  rgb, depth, alpha, inst, feat_out,   # flat outputs, view v's block at pix_off[v]
                  dummy_f, dummy_i):   # [1, 1] float32 / int32 stand-ins for the backward-only outputs
-    """Render view v on the calling thread; returns its longest tile list."""
+    """Render view v on the calling thread (its sky behind it, when it has one); returns its
+    longest tile list."""
     w = sizes[v, 0]
     h = sizes[v, 1]
     tx = sizes[v, 2]
@@ -105,6 +109,13 @@ def _render_view(v, ranges,    # [k, 2] int64 kept index ranges of all views, vi
                   alpha[p0:p0 + npx].reshape((h, w)), inst[p0:p0 + npx].reshape((h, w)),
                   feat_out[D * p0:D * (p0 + npx)].reshape((h, w, D)), dummy_f, dummy_i, False,
                   keys, keys2, idx, idx2, True)
+    if skies[v, 0] != 0:
+        sh = skies[v, 1]
+        sw = skies[v, 2]
+        cam = sky_cam[v]
+        composite_view(rgb[3 * p0:3 * (p0 + npx)].reshape((h, w, 3)), alpha[p0:p0 + npx].reshape((h, w)),
+                       f32_rows(skies[v, 0], sh * sw, 3).reshape((sh, sw, 3)), cam[:9].reshape((3, 3)),
+                       cam[9], cam[10], cam[11], cam[12])
     return longest
 
 
@@ -116,7 +127,7 @@ def _work(state,          # [6] int64: next view (in order), views finished, pub
           claimed,        # [V] int64: 1 once view v is claimed
           vdone,          # [V] int64: 1 once view v is rendered
           longest,        # [V] int64 out: each view's longest tile list
-          ranges, rsrc, rstart, src, feat, ids, viewmats, Ks, sizes, nears, bgs,
+          ranges, rsrc, rstart, src, feat, ids, viewmats, Ks, sizes, nears, bgs, skies, sky_cam,
           pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i):
     """Claim published views one at a time (in view order, or the last first with `last_first`)
     and render each, until none is left to claim or `limit` are rendered; returns how many this
@@ -146,7 +157,7 @@ def _work(state,          # [6] int64: next view (in order), views finished, pub
         idle = 0
         atomic_add(state, 5, 1)              # _CLAIMED
         longest[v] = _render_view(v, ranges, rsrc, rstart, src, feat, ids, viewmats, Ks, sizes, nears, bgs,
-                                  pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i)
+                                  skies, sky_cam, pix_off, rec, trect, rgb, depth, alpha, inst, feat_out, dummy_f, dummy_i)
         atomic_add(vdone, v, 1)            # seq_cst: the view's pixels are written before its flag
         atomic_add(state, 1, 1)            # _FINISHED
         done += 1
@@ -308,6 +319,8 @@ class ClaimedBatch:
         self._sizes = np.zeros((V, 3), i64)
         self._nears = np.zeros(V, f32)
         self._bgs = np.zeros((V, 3), f32)
+        self._skies = np.zeros((V, 3), i64)
+        self._sky_cam = np.zeros((V, 13), np.float64)
         self._rec = ws.get("rec", (N, NREC), f32)
         self._trect = ws.get("trect", (4, N), np.int32)
         self._rgb = np.empty(3 * P, f32)
@@ -340,10 +353,13 @@ class ClaimedBatch:
                          view.background)
 
     def add_parts(self, parts: Sequence, viewmat: np.ndarray, K: np.ndarray, near: float, width: int, height: int,
-                  background: np.ndarray) -> bool:
+                  background: np.ndarray, sky: Optional[tuple] = None) -> bool:
         """`add` of a view given as Gaussian parts (numpy `Gaussians`, composited in order as
         `batch.batch_view` takes them; ids -1 where a part has none) without building its
-        `BatchView`: the vector env's per-view hot path."""
+        `BatchView`: the vector env's per-view hot path. `sky`: (image, camera) to composite the
+        sky image (float32 [H', W', 3], `scene.sky.check_sky`) behind what the Gaussians leave
+        uncovered, seen from that `Camera` (render such a view on black), as
+        `sky.composite_sky_compiled` does after a render, on the thread that renders the view."""
         if self._features and any(p.features is None for p in parts):
             raise ValueError(f"Expected features of dimension {self._feat.shape[1]} in every view, found a part "
                              f"without")
@@ -352,9 +368,10 @@ class ClaimedBatch:
                   [p.object_ids for p in parts]]
         if self._features:
             fields.append([p.features for p in parts])
-        return self._add(fields, sum(len(p.means) for p in parts), viewmat, K, near, width, height, background)
+        return self._add(fields, sum(len(p.means) for p in parts), viewmat, K, near, width, height, background, sky)
 
-    def _add(self, fields: list, n: int, viewmat, K, near: float, width: int, height: int, background) -> bool:
+    def _add(self, fields: list, n: int, viewmat, K, near: float, width: int, height: int, background,
+             sky: Optional[tuple] = None) -> bool:
         """Stage one view: `fields` are its parts' arrays per field (means, quats, scales,
         opacities, colors, ids[, features]; an id part may be None: -1 over that part). Read-only
         float32 parts (the frozen arrays `Scene4D.at` gives) are read in place by the kernels, the
@@ -362,6 +379,11 @@ class ClaimedBatch:
         the render."""
         if self.closed:
             raise ValueError("Expected an open batch to add a view to, found it closed")
+        if sky is not None:
+            image = np.ascontiguousarray(sky[0], dtype=np.float32)
+            if image.ndim != 3 or image.shape[2] != 3 or min(image.shape[:2]) < 2:
+                raise ValueError(f"Expected a sky image of shape (H, W, 3) with H, W >= 2, found {image.shape}")
+            R, fx, fy, cx, cy = sky_camera(sky[1])
         if self._features and any(f.shape[1] != self._feat.shape[1] for f in fields[6]):
             raise ValueError(f"Expected features of dimension {self._feat.shape[1]} in every view, found "
                              f"{[f.shape[1] for f in fields[6]]}")
@@ -388,6 +410,13 @@ class ClaimedBatch:
         self._sizes[v] = (width, height, (width + 15) // 16)
         self._nears[v] = near
         self._bgs[v] = background
+        if sky is None:
+            self._skies[v] = 0
+        else:
+            self._skies[v] = (image.ctypes.data, image.shape[0], image.shape[1])
+            self._sky_cam[v, :9] = R.ravel()
+            self._sky_cam[v, 9:] = (fx, fy, cx, cy)
+            self._kept.append(image)
         if self._cull and n:
             k = cull_view(self._means, self._scales, self._opac, self._ids, n0, n1,
                           self._viewmats[v].astype(np.float64), self._Ks[v].astype(np.float64),
@@ -461,7 +490,8 @@ class ClaimedBatch:
             return 0
         return int(_work(self._state, int(limit), int(spin), bool(last_first), self._claimed, self._vdone,
                          self._longest, self._ranges, self._rsrc, self._rstart, self._src, self._feat, self._ids,
-                         self._viewmats, self._Ks, self._sizes, self._nears, self._bgs, self._pix_off, self._rec,
+                         self._viewmats, self._Ks, self._sizes, self._nears, self._bgs, self._skies,
+                         self._sky_cam, self._pix_off, self._rec,
                          self._trect,
                          self._rgb, self._depth, self._alpha, self._inst, self._fout,
                          np.empty((1, 1), np.float32), np.empty((1, 1), np.int32)))
