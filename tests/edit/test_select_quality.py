@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import morphosim_gym as ms
-from morphosim_gym.edit.select_quality import rendered_selection, selection_against_masks
+from morphosim_gym.edit.select_quality import rendered_selection, selection_against_masks, share_masks
 
 SMALL = ms.GenerationConfig(width=48, height=48, num_frames=5, detail=0.5)
 
@@ -55,3 +55,27 @@ def test_bad_input_names_the_problem(clip):
         selection_against_masks(scene, sel, cams[:2], times, clip.masks >= 0)
     with pytest.raises(ValueError, match="camera's size"):
         selection_against_masks(scene, sel, cams, times, (clip.masks >= 0)[:, :10])
+
+
+def test_share_masks_are_what_the_exact_selection_meets(clip):
+    scene = clip.ground_truth
+    cams, times = _views(clip)
+    bus = scene.object("bus").id
+    inst = next(k for k, v in clip.labels.items() if v == "bus")
+    truth = share_masks(scene, [bus], cams, times)
+    assert truth.shape == clip.masks.shape and truth.dtype == bool
+    exact = scene.gaussians.object_ids == bus
+    assert selection_against_masks(scene, exact, cams, times, truth) == {"precision": 1.0, "recall": 1.0}
+    # the clip's instance masks (largest single weight) leave out rim pixels where the bus gives
+    # more than half the colour: the share masks hold them and little else
+    rims = truth & ~(clip.masks == inst)
+    assert rims.sum() > 0 and ((clip.masks == inst) & ~truth).sum() <= rims.sum()
+    assert 0.85 < (truth & (clip.masks == inst)).sum() / truth.sum() < 1.0
+    # the road's and the bus's masks do not overlap; the road's nearly equals its instance mask
+    road = share_masks(scene, [scene.object("road").id], cams, times)
+    road_inst = clip.masks == next(k for k, v in clip.labels.items() if v == "road")
+    assert not (road & truth).any() and (road & road_inst).sum() / (road | road_inst).sum() > 0.97
+    with pytest.raises(ValueError, match="object ids"):
+        share_masks(scene, [10_000], cams, times)
+    with pytest.raises(ValueError, match="one time per camera"):
+        share_masks(scene, [bus], cams, times[:1])

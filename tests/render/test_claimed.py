@@ -387,3 +387,19 @@ def test_views_with_skies_are_composited_where_they_render_and_match(helpers):
         _assert_same(a, ms.render(view[0], view[1], background=view[2], sky=view[3] if len(view) == 4 else None))
     shown = [np.mean(out.rgb[out.alpha < 0.5] > 0) for view, out in zip(views, got) if len(view) == 4]
     assert min(shown) > 0.9                                  # the sky is there, behind uncovered pixels
+
+
+def test_a_view_with_a_bad_sky_is_refused_and_changes_nothing():
+    (g, cam, bg), = _views(_SPECS[:1])
+    batch = ClaimedBatch(capacity=(2, 10_000, 2 * 100 * 100))
+    view = (cam.world_to_camera, cam.K, cam.near, cam.width, cam.height, np.zeros(3))
+    with pytest.raises(ValueError, match="sky image"):
+        batch.add_parts([g], *view, sky=(np.zeros((8, 8)), cam))
+    assert batch.num_views == 0
+    sky = ms.scene.sky.check_sky(np.full((4, 8, 3), 0.5, np.float32))
+    assert batch.add_parts([g], *view, sky=(sky, cam)) and batch.num_views == 1
+    batch.close()
+    batch.work()
+    got = batch.outputs()[0]
+    _assert_same(ms.render(g, cam, sky=sky), render_batch([(g, cam, None, sky)])[0])
+    np.testing.assert_array_equal(got["rgb"], ms.render(g, cam, sky=sky).rgb)
