@@ -24,6 +24,7 @@ from .tracks import flow_tracks
 __all__ = ["SETTING_ID", "RGBPriorEstimators", "object_depths"]
 
 SETTING_ID = 0      # the setting (ground, road, water...) in estimated masks; objects are 1..
+BEYOND_ID = -1      # neither the setting nor an object: the sky (no ground there, or none at all)
 
 
 @dataclass(frozen=True)
@@ -46,9 +47,10 @@ class RGBPriorEstimators:
       each now goes to the object whose box motion it follows (`overlaps.split_by_motion`; after
       the colour correction: before it, two 96-px sheep came out worse, IoU 0.68 -> 0.43;
       `motion_split=False` skips it).
-      Last, with a plan, each moving object's outline against the setting is trimmed to the
-      pixels it covers at least half of (`rims.trim_rims`; `rims=False` skips it): masks from
-      motion take every pixel the object touches, a rim of setting 1 px wide.
+      Last, with a plan, each moving object's outline against the setting, and against the sky
+      (also where no setting is seen: a bird up in the sky), is trimmed to the pixels it covers
+      at least half of (`rims.trim_rims`; `rims=False` skips it): masks from motion take every
+      pixel the object touches, a rim of setting 1 px wide.
       Then numbered instances of one planned object ("duck 1", "duck 2"), which move in step and
       look alike, so that neither motion nor colour tells them apart, share out their pixels by
       the one shape they share in their boxes (`shapes.split_by_shape`; `sibling_shapes=False`
@@ -264,7 +266,7 @@ class RGBPriorEstimators:
                     ids[i][lab == c] = first + idx
                     setting[i][lab == c] = False
             labels = {**labels, **{first + k: str(n) for k, n in enumerate(static_labels)}}
-        ids[ids == 0] = -1
+        ids[ids == 0] = BEYOND_ID
         ids[setting] = SETTING_ID
         if self.colour_refine and targets and setting.any():
             still = None
@@ -276,8 +278,9 @@ class RGBPriorEstimators:
             ids = refine_by_colour(f, ids, SETTING_ID, movers=range(1, len(targets) + 1), still=still)
         if self.motion_split and len(targets) > 1:
             ids = split_by_motion(f, ids, targets, self.box_margin)
-        if self.rims and targets and setting.any():
-            ids = np.stack([trim_rims(f[i], ids[i], range(1, len(targets) + 1), SETTING_ID) for i in range(t)])
+        if self.rims and targets:
+            ids = np.stack([trim_rims(f[i], ids[i], range(1, len(targets) + 1), SETTING_ID, backdrops=(BEYOND_ID,))
+                            for i in range(t)])
         if self.sibling_shapes and len(targets) > 1:
             ids = split_by_shape(ids, targets)
         if setting.any():

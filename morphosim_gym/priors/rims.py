@@ -8,7 +8,8 @@ mean colour of the object's pixels a pixel inside the rim and `bg` the mean colo
 pixels a pixel outside it, both within a `window` around it, the pixel's coverage is its colour
 projected onto the line from `bg` to `fg` (0 at `bg`, 1 at `fg`); under one half it goes to the
 setting. Where the two colours differ by less than `min_contrast` the pixel says nothing and
-stays.
+stays. The same holds against the sky (`backdrops`): a bird's rim against the sky mixes the two
+the same way, and the sky, which no object covers, keeps the pixels the bird covers less than half of.
 """
 
 from __future__ import annotations
@@ -33,27 +34,32 @@ def _local_mean(frame: np.ndarray, mask: np.ndarray, window: int) -> tuple[np.nd
 
 
 def trim_rims(frame: np.ndarray, ids: np.ndarray, objects: Iterable[int], setting_id: int = 0, window: int = 7,
-              min_contrast: float = 20.0) -> np.ndarray:
-    """[H, W] ids with each of `objects`' rim pixels against the setting (`setting_id`) that it
-    covers less than half of given to the setting (see the module docstring). `frame` [H, W, 3]
-    (uint8 or float in 0-255 units); the input `ids` is not changed."""
+              min_contrast: float = 20.0, backdrops: Iterable[int] = ()) -> np.ndarray:
+    """[H, W] ids with each of `objects`' rim pixels against the setting (`setting_id`), then
+    against each of `backdrops` (other ids behind every object: the sky's), that it covers less
+    than half of given to that backdrop (see the module docstring). `frame` [H, W, 3] (uint8 or
+    float in 0-255 units); the input `ids` is not changed."""
     if frame.shape[:2] != ids.shape:
         raise ValueError(f"Expected a frame [H, W, 3] and ids [H, W] of one size, found {frame.shape}, {ids.shape}")
+    objects = list(objects)
+    behind = [setting_id] + [b for b in backdrops if b != setting_id]
+    if set(behind) & set(objects):
+        raise ValueError(f"Expected backdrops that are not objects, found {sorted(set(behind) & set(objects))}")
     f = np.asarray(frame, np.float32)
     out = ids.copy()
-    setting = ids == setting_id
-    near_setting = cv2.dilate(setting.astype(np.uint8), _K3).astype(bool)
-    for k in objects:
-        obj = (ids == k).astype(np.uint8)
-        core = cv2.erode(obj, _K3).astype(bool)
-        rim = obj.astype(bool) & ~core & near_setting
-        if not rim.any():
-            continue
-        fg, n_fg = _local_mean(f, core, window)
-        bg, n_bg = _local_mean(f, setting & ~cv2.dilate(obj, _K3).astype(bool), window)
-        d = fg - bg
-        dd = (d * d).sum(-1)
-        cover = ((f - bg) * d).sum(-1) / np.maximum(dd, 1e-6)
-        drop = rim & (n_fg > 0) & (n_bg > 0) & (dd >= min_contrast ** 2) & (cover < 0.5)
-        out[drop] = setting_id
+    for b in behind:
+        back = ids == b
+        near = cv2.dilate(back.astype(np.uint8), _K3).astype(bool)
+        for k in objects:
+            obj = (ids == k).astype(np.uint8)
+            rim = (out == k) & ~cv2.erode(obj, _K3).astype(bool) & near
+            if not rim.any():
+                continue
+            fg, n_fg = _local_mean(f, cv2.erode(obj, _K3).astype(bool), window)
+            bg, n_bg = _local_mean(f, back & ~cv2.dilate(obj, _K3).astype(bool), window)
+            d = fg - bg
+            dd = (d * d).sum(-1)
+            cover = ((f - bg) * d).sum(-1) / np.maximum(dd, 1e-6)
+            drop = rim & (n_fg > 0) & (n_bg > 0) & (dd >= min_contrast ** 2) & (cover < 0.5)
+            out[drop] = b
     return out
