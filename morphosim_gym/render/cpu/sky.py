@@ -10,8 +10,9 @@ ray), and a third adds the bilinear colours. The result agrees with `composite_s
 rounding (tests/render/test_sky_kernel.py). The kernels compile with the renderer's options
 (`_jit.jit`: FMA contraction allowed), so the sky composited inside a view's compiled render
 (`claimed.ClaimedBatch`) and after one (`composite_sky_compiled`: `render`, `render_batch`)
-gives the same bits; with different options LLVM fused the float64 ray products in one
-context and not the other, a last-bit difference in a third of the sky pixels.
+gives the same bits. Compiled without contraction they did not: inlined into the renderer's
+contraction-enabled kernel they gave other last bits on a third of the sky pixels than called
+on their own (tests/render/test_claimed.py holds the two paths equal).
 """
 
 from __future__ import annotations
