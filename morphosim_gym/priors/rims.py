@@ -52,10 +52,11 @@ def trim_rims(frame: np.ndarray, ids: np.ndarray, objects: Iterable[int], settin
         near = cv2.dilate(back.astype(np.uint8), _K3).astype(bool)
         for k in objects:
             obj = (ids == k).astype(np.uint8)
-            rim = (out == k) & ~cv2.erode(obj, _K3).astype(bool) & near
+            core = cv2.erode(obj, _K3).astype(bool)
+            rim = (out == k) & ~core & near
             if not rim.any():
                 continue
-            fg, n_fg = _local_mean(f, cv2.erode(obj, _K3).astype(bool), window)
+            fg, n_fg = _local_mean(f, core, window)
             bg, n_bg = _local_mean(f, back & ~cv2.dilate(obj, _K3).astype(bool), window)
             d = fg - bg
             dd = (d * d).sum(-1)
