@@ -35,6 +35,7 @@ _INV_2PI = np.float32(1 / (2 * np.pi))
 _INV_PI = np.float32(1 / np.pi)
 _PI, _HALF_PI, _QUARTER_PI = np.float32(np.pi), np.float32(np.pi / 2), np.float32(np.pi / 4)
 _TAN_PI_8 = np.float32(np.tan(np.pi / 8))
+_CHUNK_PIXELS = 1024       # pixels `composite_view` lists at a time (its scratch: 28 bytes each)
 # atan(r) = r + r z (A1 + A2 z + A3 z^2 + A4 z^3), z = r^2, |r| <= tan(pi / 8): a least-squares fit
 # of the relative error on 20,000 Chebyshev nodes (max relative error 2.1e-8, under float32's 6e-8)
 _A1, _A2, _A3, _A4 = np.float32(-0.33332938), np.float32(0.1997736), np.float32(-0.13874442), np.float32(0.08044441)
@@ -68,12 +69,13 @@ def atan2_f32(y, x, out):      # pragma: no cover - compiled
 
 
 @jit
-def _uncovered_rays(alpha, R, fx, fy, cx, cy, pix, dx, dy, dz):      # pragma: no cover - compiled
-    """Pixels (row-major index into `pix`) with alpha < SKY_VISIBLE_BELOW and their world ray
-    directions (float32, not normalised: the angles do not need it); returns how many."""
-    hgt, wid = alpha.shape[0], alpha.shape[1]
+def _uncovered_rays(alpha, r0, r1, R, fx, fy, cx, cy, pix, dx, dy, dz):      # pragma: no cover - compiled
+    """Pixels of rows r0..r1 - 1 (row-major index into `pix`) with alpha < SKY_VISIBLE_BELOW and
+    their world ray directions (float32, not normalised: the angles do not need it); returns how
+    many."""
+    wid = alpha.shape[1]
     k = 0
-    for r in range(hgt):
+    for r in range(r0, r1):
         y = (r + 0.5 - cy) / fy
         for c in range(wid):
             if not alpha[r, c] < _VISIBLE_BELOW:
@@ -134,13 +136,17 @@ def composite_view(rgb, alpha, image, R, fx, fy, cx, cy):      # pragma: no cove
     camera's world-to-camera rotation (float64 [3, 3]), fx, fy, cx, cy its intrinsics. Compiled
     renders call it on their own threads (`claimed.ClaimedBatch`), the others through
     `composite_sky_compiled`: one arithmetic, so every path gives the same bits."""
-    n = alpha.shape[0] * alpha.shape[1]
-    pix = np.empty(n, np.int64)
-    d = np.empty((5, n), np.float32)          # ray x, y, z, then texel u, v
-    k = _uncovered_rays(alpha, R, fx, fy, cx, cy, pix, d[0], d[1], d[2])
-    if k:
-        _texel_uv(d[0], d[1], d[2], k, image.shape[0], image.shape[1], d[3], d[4])
-        _add_sky(rgb.reshape((n, 3)), alpha.reshape(n), image, pix, k, d[3], d[4])
+    hgt, wid = alpha.shape[0], alpha.shape[1]
+    n = hgt * wid
+    rows = max(1, _CHUNK_PIXELS // max(wid, 1))   # a few rows at a time: scratch of ~30 KB, not ~7x a view
+    pix = np.empty(rows * wid, np.int64)
+    d = np.empty((5, rows * wid), np.float32)     # ray x, y, z, then texel u, v
+    flat_rgb, flat_alpha = rgb.reshape((n, 3)), alpha.reshape(n)
+    for r0 in range(0, hgt, rows):
+        k = _uncovered_rays(alpha, r0, min(r0 + rows, hgt), R, fx, fy, cx, cy, pix, d[0], d[1], d[2])
+        if k:
+            _texel_uv(d[0], d[1], d[2], k, image.shape[0], image.shape[1], d[3], d[4])
+            _add_sky(flat_rgb, flat_alpha, image, pix, k, d[3], d[4])
 
 
 def sky_camera(camera: Camera) -> tuple[np.ndarray, float, float, float, float]:
