@@ -47,17 +47,20 @@ def trim_rims(frame: np.ndarray, ids: np.ndarray, objects: Iterable[int], settin
         raise ValueError(f"Expected backdrops that are not objects, found {sorted(set(behind) & set(objects))}")
     f = np.asarray(frame, np.float32)
     out = ids.copy()
-    for b in behind:
-        back = ids == b
-        near = cv2.dilate(back.astype(np.uint8), _K3).astype(bool)
-        for k in objects:
-            obj = (ids == k).astype(np.uint8)
-            core = cv2.erode(obj, _K3).astype(bool)
-            rim = (out == k) & ~core & near
+    backs = {b: ids == b for b in behind}
+    nears = {b: cv2.dilate(m.astype(np.uint8), _K3).astype(bool) for b, m in backs.items()}
+    for k in objects:                  # objects only give up their own pixels: their order does not matter
+        obj = (ids == k).astype(np.uint8)
+        core = cv2.erode(obj, _K3).astype(bool)
+        grown = cv2.dilate(obj, _K3).astype(bool)
+        fg = None
+        for b in behind:               # the setting first, then the other backdrops
+            rim = (out == k) & ~core & nears[b]
             if not rim.any():
                 continue
-            fg, n_fg = _local_mean(f, core, window)
-            bg, n_bg = _local_mean(f, back & ~cv2.dilate(obj, _K3).astype(bool), window)
+            if fg is None:
+                fg, n_fg = _local_mean(f, core, window)
+            bg, n_bg = _local_mean(f, backs[b] & ~grown, window)
             d = fg - bg
             dd = (d * d).sum(-1)
             cover = ((f - bg) * d).sum(-1) / np.maximum(dd, 1e-6)
