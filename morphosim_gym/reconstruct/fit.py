@@ -31,8 +31,8 @@ class FitConfig:
         iterations: optimisation steps (one frame each).
         lr_means: position learning rate, times the median scene depth.
         lr_scales, lr_quats, lr_opacity, lr_colors: per-Gaussian learning rates.
-        lr_node_trans: node translation learning rate, times the median scene depth.
-        lr_node_quats: node rotation learning rate.
+        lr_node_trans: learning rate of the node centres' displacements, times the median scene depth.
+        lr_node_quats: learning rate of the node rotations (each about its own centre).
         w_ssim, w_depth, w_mask, w_mask_iou, w_empty, w_track, w_arap, w_smooth: loss weights.
         w_depth_invariant: weight of the scale- and shift-invariant depth term
             (`losses.scale_shift_depth_loss`, per instance and frame): the prior's depth shape

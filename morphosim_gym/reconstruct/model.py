@@ -95,8 +95,15 @@ class DynamicGaussians(nn.Module):
         means, quats, scales, opacities, colors: initial canonical Gaussians (activated values).
         object_ids: [N] instance each Gaussian was initialised from.
         node_centres: [K, 3] canonical node positions; node_objects: [K] their instances.
-        node_rot: [T, K, 3, 3], node_trans: [T, K, 3] initial poses.
+        node_rot: [T, K, 3, 3], node_trans: [T, K, 3] initial poses (x_t = R x + t, rotations about
+            the world origin, as `Motion` stores them).
         slots: nodes per Gaussian.
+
+    Each node turns about its own centre: the parameter `node_trans` is the node centre's
+    displacement (t + R c - c), so an optimiser's step on a node's rotation does not also move it.
+    Turned about the world origin, an object metres away from it moved by metres times each of
+    Adam's (unit-size) steps on its rotation: a kite's fitted path ended 10-17 px off on 4 of 13
+    input views, its initial poses within 1 px.
     """
 
     def __init__(self, means, quats, scales, opacities, colors, object_ids, node_centres, node_objects,
@@ -115,7 +122,10 @@ class DynamicGaussians(nn.Module):
 
         rq = matrix_to_quat(np.asarray(node_rot)) if len(node_centres) else np.zeros((len(node_rot), 0, 4))
         self.node_quats = nn.Parameter(torch.as_tensor(rq, dtype=f))
-        self.node_trans = nn.Parameter(torch.as_tensor(node_trans, dtype=f))
+        c = np.asarray(node_centres, np.float64).reshape(-1, 3)
+        moved = np.einsum("tkij,kj->tki", np.asarray(node_rot, np.float64).reshape(-1, len(c), 3, 3), c) \
+            if len(c) else np.zeros((len(node_rot), 0, 3))
+        self.node_trans = nn.Parameter(torch.as_tensor(np.asarray(node_trans, np.float64) + moved - c, dtype=f))
         self.slots = slots
         self.features: nn.Parameter | None = None
         self.rebind()
@@ -165,7 +175,7 @@ class DynamicGaussians(nn.Module):
             return self.means, self.quats
         q = self.node_quats[frame] / self.node_quats[frame].norm(dim=-1, keepdim=True)   # [K, 4]
         R = quat_to_rotmat(q)                                                            # [K, 3, 3]
-        tr = self.node_trans[frame]                                                      # [K, 3]
+        tr = self._origin_trans(R, frame)                                                # [K, 3]
         rows, dense = self._bound_rows, self._bound_dense                               # [B], [B, K]
         blended = dense @ torch.cat([R.reshape(-1, 9), tr], dim=1)                       # [B, 12]
         m = self.means.index_select(0, rows)
@@ -179,11 +189,17 @@ class DynamicGaussians(nn.Module):
         quats = self.quats.index_copy(0, rows, quat_mul(blend, self.quats.index_select(0, rows)))
         return means, quats
 
+    def _origin_trans(self, R: torch.Tensor, frame: int) -> torch.Tensor:
+        """[K, 3] each node's translation about the world origin at a frame (x_t = R x + t) from its
+        rotations R [K, 3, 3] and its centre's displacement `node_trans[frame]`: t = d + c - R c."""
+        c = self.node_centres
+        return self.node_trans[frame] + c - (R @ c[:, :, None])[..., 0]
+
     def points_at(self, points: torch.Tensor, nodes: torch.Tensor, weights: torch.Tensor, frame: int) -> torch.Tensor:
         """Move canonical points [P, 3] with given skinning [P, M] to a frame."""
         q = self.node_quats[frame] / self.node_quats[frame].norm(dim=-1, keepdim=True)
         R = quat_to_rotmat(q)
-        tr = self.node_trans[frame]
+        tr = self._origin_trans(R, frame)
         idx = nodes.clamp(min=0)
         moved = torch.einsum("pmij,pj->pmi", gather_rows(R, idx), points) + gather_rows(tr, idx)
         w = torch.where(nodes >= 0, weights, torch.zeros_like(weights))
@@ -201,7 +217,11 @@ class DynamicGaussians(nn.Module):
         q = self.node_quats.detach().numpy().astype(np.float64)
         if q.size:
             q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-        motion = Motion(q, self.node_trans.detach().numpy().astype(np.float64), self.skin_nodes.numpy(),
+        c = self.node_centres.numpy().astype(np.float64)
+        trans = self.node_trans.detach().numpy().astype(np.float64) + c
+        if q.size:
+            trans -= np.einsum("tkij,kj->tki", quat_to_rotmat(torch.as_tensor(q)).numpy(), c)
+        motion = Motion(q, trans, self.skin_nodes.numpy(),
                         self.skin_weights.numpy(), self.node_objects.numpy())
         return g, motion
 

@@ -19,12 +19,12 @@ def clip():
     return sim.generate_clip("The bus is moving from right to left", seed=0)
 
 
-def _pose_jitter(clip, lr_decay: float) -> float:
+def _pose_jitter(clip, lr_decay: float, **settings) -> float:
     """Mean frame-to-frame second difference, in pixels, of the fitted node centres' image
     positions (the bus drives at a steady speed, so a settled fit has almost none)."""
     init = initialize(clip, seed=0)
     model = init.model
-    cfg = FitConfig(iterations=100, lr_decay=lr_decay, progress=False)
+    cfg = FitConfig(iterations=100, lr_decay=lr_decay, progress=False, **settings)
     fit(model, clip, init.reference, init.dynamic, cfg, seed=0, background=estimate_background_color(clip))
     centres = model.node_centres
     with torch.no_grad():
@@ -35,9 +35,11 @@ def _pose_jitter(clip, lr_decay: float) -> float:
 
 
 def test_decaying_learning_rate_settles_the_node_poses(clip):
-    constant = _pose_jitter(clip, lr_decay=1.0)
-    decayed = _pose_jitter(clip, lr_decay=0.03)
-    assert decayed < 0.75 * constant, (decayed, constant)
+    # a node-translation rate 3x the default's: since nodes turn about their own centres, the
+    # default's constant rate jitters little on this short clip (0.087 px, decayed 0.072)
+    constant = _pose_jitter(clip, lr_decay=1.0, lr_node_trans=3e-3)
+    decayed = _pose_jitter(clip, lr_decay=0.03, lr_node_trans=3e-3)
+    assert decayed < 0.5 * constant, (decayed, constant)
 
 
 @pytest.mark.parametrize("change, message", [(dict(iterations=0), "at least 1 fit iteration"),
@@ -200,3 +202,33 @@ def test_the_fit_warp_is_the_scenes_skinning():
         want_q = want_q / np.linalg.norm(want_q, axis=-1, keepdims=True)
         assert np.abs(means.detach().numpy() - want_m).max() < 1e-5
         assert np.minimum(np.abs(got_q - want_q).max(-1), np.abs(got_q + want_q).max(-1)).max() < 1e-5
+
+
+def test_nodes_turn_about_their_own_centres():
+    """The model starts at the poses it is given (x_t = R x + t about the world origin), and a
+    change of a node's rotation leaves its centre where it is: an object far from the world
+    origin does not swing away when an optimiser steps its rotation (about the origin, Adam's
+    unit-size steps drew a kite 10-17 px off its path)."""
+    from morphosim_gym.reconstruct.model import DynamicGaussians
+    from morphosim_gym.scene.rotations import axis_angle_to_quat, quat_to_matrix
+
+    rng = np.random.default_rng(5)
+    frames = 3
+    nodes = np.array([[12.0, -3.0, 1.0], [12.5, -3.0, 1.2]])                # far from the origin
+    rot = quat_to_matrix(axis_angle_to_quat(rng.normal(size=(frames, 2, 3)), rng.normal(scale=0.3, size=(frames, 2))))
+    trans = rng.normal(scale=0.5, size=(frames, 2, 3))
+    pts = nodes + rng.normal(scale=0.01, size=(2, 3))                          # one Gaussian at each node
+    model = DynamicGaussians(pts, np.tile([1.0, 0, 0, 0], (2, 1)), np.full((2, 3), 0.05), np.full(2, 0.5),
+                             np.full((2, 3), 0.5), np.zeros(2, np.int32), nodes, np.zeros(2, np.int32), rot, trans,
+                             slots=1)
+    one = torch.arange(2)[:, None], torch.ones(2, 1)
+    for t in range(frames):
+        want = np.einsum("kij,kj->ki", rot[t], nodes) + trans[t]
+        assert np.abs(model.points_at(model.node_centres, *one, t).detach().numpy() - want).max() < 1e-4
+    before = model.points_at(model.node_centres, *one, 1).detach().numpy()
+    with torch.no_grad():
+        model.node_quats[1] = torch.as_tensor(axis_angle_to_quat(np.array([[0.0, 0.0, 1.0]] * 2), np.full(2, 0.05)), dtype=torch.float32)
+    after = model.points_at(model.node_centres, *one, 1).detach().numpy()
+    assert np.abs(after - before).max() < 1e-5          # about the origin: 0.05 rad x 12 m = 0.6 m
+    moved, _ = model.warp(1)
+    assert np.linalg.norm(moved.detach().numpy() - after, axis=1).max() < 0.05   # each Gaussian near its node
