@@ -206,7 +206,9 @@ def arap_loss(node_pos_t: torch.Tensor, node_pos_0: torch.Tensor, pairs: torch.T
 
 
 def smooth_motion_loss(node_quats: torch.Tensor, node_trans: torch.Tensor, frames: torch.Tensor) -> torch.Tensor:
-    """Second differences of node translations and rotations around the given frames [F] (1..T-2)."""
+    """Second differences of node translations and rotations around the given frames [F] (1..T-2).
+    `DynamicGaussians.node_trans` are the node centres' displacements, so this smooths each
+    centre's path (not a translation about the world origin, which a turn changes too)."""
     if node_trans.shape[1] == 0 or frames.numel() == 0:
         return node_trans.sum() * 0.0
     a, b, c = frames - 1, frames, frames + 1
