@@ -14,7 +14,7 @@ import torch
 from torch import nn
 
 from ..scene import Gaussians, Motion
-from ..scene.rotations import quat_normalize
+from ..scene.rotations import quat_normalize, quat_to_matrix
 
 __all__ = ["DynamicGaussians", "quat_to_rotmat", "rbf_skinning", "inverse_sigmoid", "gather_rows"]
 
@@ -220,7 +220,7 @@ class DynamicGaussians(nn.Module):
         c = self.node_centres.numpy().astype(np.float64)
         trans = self.node_trans.detach().numpy().astype(np.float64) + c
         if q.size:
-            trans -= np.einsum("tkij,kj->tki", quat_to_rotmat(torch.as_tensor(q)).numpy(), c)
+            trans -= np.einsum("tkij,kj->tki", quat_to_matrix(q), c)
         motion = Motion(q, trans, self.skin_nodes.numpy(),
                         self.skin_weights.numpy(), self.node_objects.numpy())
         return g, motion
