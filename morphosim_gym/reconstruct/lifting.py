@@ -12,7 +12,7 @@ import numpy as np
 
 from ..scene import Camera, GeneratedClip
 
-__all__ = ["PointSet", "backproject", "kabsch", "instance_motion", "mask_motion", "off_border", "voxel_downsample", "interior_mask",
+__all__ = ["PointSet", "backproject", "kabsch", "lift_tracks", "robust_kabsch", "instance_motion", "mask_motion", "off_border", "voxel_downsample", "interior_mask",
            "estimate_background_color"]
 
 
@@ -123,7 +123,19 @@ def kabsch(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) 
     return rot, cd - rot @ cs
 
 
-def _lift_tracks(clip: GeneratedClip, frame: int, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def robust_kabsch(src: np.ndarray, dst: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`kabsch` reweighted `iterations` times by a Cauchy function of each pair's residual (scale:
+    3x the median residual), so a few wrong correspondences barely move it: (R, t, weights [n])."""
+    w = np.ones(len(src))
+    for _ in range(iterations):
+        rot, tv = kabsch(src, dst, w)
+        res = np.linalg.norm(src @ rot.T + tv - dst, axis=1)
+        scale = max(float(np.median(res)) * 3.0, 1e-4)
+        w = 1.0 / (1.0 + (res / scale) ** 2)
+    return rot, tv, w
+
+
+def lift_tracks(clip: GeneratedClip, frame: int, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """World points of track positions in a frame via the depth prior, and which ones had a depth."""
     H, W = clip.height, clip.width
     c = np.clip(np.floor(uv[:, 0]).astype(int), 0, W - 1)
@@ -246,7 +258,7 @@ def reprojection_residual(clip: GeneratedClip, instance: int, reference: int, ro
         return float("nan")
     idx = instance_tracks(clip, instance)
     idx = idx[clip.track_visible[idx, reference]]
-    src, ok = _lift_tracks(clip, reference, clip.tracks[idx, reference])
+    src, ok = lift_tracks(clip, reference, clip.tracks[idx, reference])
     errors = _frame_errors(clip, idx, reference, src, ok, rots, trans, min_tracks)
     return float(np.median(errors)) if errors else float("nan")
 
@@ -267,7 +279,7 @@ def static_residual(clip: GeneratedClip, instance: int, reference: int, min_trac
     if len(idx) < min_tracks:
         return 0.0
     cam_ref = clip.cameras[reference]
-    src, ok = _lift_tracks(clip, reference, clip.tracks[idx, reference])
+    src, ok = lift_tracks(clip, reference, clip.tracks[idx, reference])
     rays = src - cam_ref.position
     best = np.inf
     for s in scales:
@@ -296,24 +308,19 @@ def instance_motion(clip: GeneratedClip, instance: int, reference: int, min_trac
     idx = idx[vis[idx, reference]]
     if len(idx) < min_tracks:
         return rots, trans, good
-    src, ok_src = _lift_tracks(clip, reference, tr[idx, reference])
+    src, ok_src = lift_tracks(clip, reference, tr[idx, reference])
     for t in range(T):
         if t == reference:
             continue
         use = vis[idx, t] & ok_src
         if use.sum() < min_tracks:
             continue
-        dst, ok = _lift_tracks(clip, t, tr[idx[use], t])
+        dst, ok = lift_tracks(clip, t, tr[idx[use], t])
         s = src[use][ok]
         d = dst[ok]
         if len(s) < min_tracks:
             continue
-        w = np.ones(len(s))
-        for _ in range(robust_iters):
-            rot, tv = kabsch(s, d, w)
-            res = np.linalg.norm(s @ rot.T + tv - d, axis=1)
-            scale = max(np.median(res) * 3.0, 1e-4)
-            w = 1.0 / (1.0 + (res / scale) ** 2)
+        rot, tv, _ = robust_kabsch(s, d, robust_iters)
         rots[t], trans[t], good[t] = rot, tv, True
     # fill frames without an estimate: hold the nearest estimated frame
     est = np.flatnonzero(good)

@@ -12,6 +12,8 @@ from morphosim_gym.reconstruct.lifting import kabsch
 from morphosim_gym.reconstruct.spin import spin_angles, spin_poses
 from morphosim_gym.scene import Camera, GeneratedClip
 
+from .conftest import football_clip
+
 SIZE = 64
 
 
@@ -113,18 +115,10 @@ def test_only_a_steady_visible_turn_replaces_the_poses(steps, turns):
 
 @pytest.fixture(scope="module")
 def ball_clip():
-    # the real football of the Sweet Home 3D furniture (the procedural ball's stripes barely show a turn)
-    from morphosim_gym.generate.real_assets import asset_candidates
     from morphosim_gym.priors import prepare_priors
     from morphosim_gym.reconstruct.pipeline import video_estimators
 
-    with pytest.MonkeyPatch.context() as mp:
-        mp.delenv("MORPHOSIM_ASSET_SOURCES", raising=False)
-        if "sweethome3d/blendswap-cc-by/ballonfoot" not in [a.id for a in asset_candidates("ball")]:
-            pytest.skip("needs the Sweet Home 3D furniture (apt install sweethome3d-furniture)")
-        sim = ms.MorphoSim(generation=ms.GenerationConfig(width=64, height=64, num_frames=17),
-                           reconstruction="oracle")
-        clip = sim.generate_clip("A small, vibrant red rubber ball is bouncing from right to left", seed=0)
+    clip = football_clip(64, 17)
     return clip, prepare_priors(clip, "estimated", estimators=video_estimators(clip))
 
 
