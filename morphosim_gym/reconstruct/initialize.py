@@ -178,21 +178,28 @@ def unlabelled_host(clip: GeneratedClip, static_ids: list[int]) -> int | None:
     return max(static_ids, key=lambda i: int((clip.masks == i).sum()))
 
 
-def _mask_residual(clip: GeneratedClip, instance: int, reference: int, trans: np.ndarray, seen: np.ndarray) -> float:
+def _mask_residual(clip: GeneratedClip, instance: int, reference: int, trans: np.ndarray, seen: np.ndarray,
+                   scales: np.ndarray = np.linspace(0.85, 1.15, 31)) -> float:
     """Pixels by which "this instance does not move" misplaces its mask centroid (75th
-    percentile over the frames where the mask is seen); 0 with fewer than 2 such frames."""
+    percentile over the frames where the mask is seen), minimised over the depth at which the
+    reference centroid is lifted (times `scales`: a centroid lifted a few percent off its depth, a
+    mask grown over the ground behind it, seems to slide as the camera moves, as in
+    `lifting.static_residual`); 0 with fewer than 2 such frames."""
     if seen.sum() < 2:
         return 0.0
     cen = backproject(clip, reference, select=clip.masks[reference] == instance).points
     if not len(cen):
         return 0.0
     c = cen.mean(0)
-    err = []
-    for t in np.flatnonzero(seen):
-        moved, _ = clip.cameras[t].project((c + trans[t])[None])
-        still, _ = clip.cameras[t].project(c[None])
-        err.append(float(np.linalg.norm(moved - still)))
-    return float(np.percentile(err, 75.0))
+    eye = clip.cameras[reference].position
+    frames = np.flatnonzero(seen)
+    moved = [clip.cameras[t].project((c + trans[t])[None])[0][0] for t in frames]
+    best = np.inf
+    for s in scales:
+        still = eye + s * (c - eye)
+        err = [float(np.linalg.norm(m - clip.cameras[t].project(still[None])[0][0])) for t, m in zip(frames, moved)]
+        best = min(best, float(np.percentile(err, 75.0)))
+    return best
 
 
 def _coverage(clip: GeneratedClip, instance: int, points: np.ndarray, rots: np.ndarray, trans: np.ndarray,
