@@ -19,13 +19,27 @@ def _smooth_field(rng: np.random.Generator, shape: tuple[int, int], amplitude: f
     return amplitude * f / max(float(np.abs(f).max()), 1e-6)
 
 
+def _shift_outlines(masks: np.ndarray, pixels: int, grow: bool) -> np.ndarray:
+    """[H, W] instance masks with every outline moved by `pixels`: each label (-1, nothing, counts
+    as one) dilated in turn, larger labels first when `grow` (so objects grow into the ground and
+    the sky around them), smaller first otherwise (the ground and the sky eat into the objects)."""
+    labels, areas = np.unique(masks, return_counts=True)
+    order = labels[np.argsort(-areas, kind="stable")]
+    out = masks.copy()
+    k = np.ones((3, 3), np.uint8)
+    for lab in (order if grow else order[::-1]):
+        out[cv2.dilate((masks == lab).astype(np.uint8), k, iterations=pixels).astype(bool)] = lab
+    return out
+
+
 def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10, depth_noise: float = 0.01,
                    mask_pixels: int = 2, mask_drop: float = 0.05, track_noise: float = 1.0,
                    track_drop: float = 0.10) -> GeneratedClip:
     """A copy of a clip carrying all three priors with realistic errors: depth times a smooth
-    +-`depth_field` field and `depth_noise` relative noise; each frame's masks eroded or dilated
-    by 1..`mask_pixels` px, `mask_drop` of the frames' masks dropped (all background); tracks plus
-    `track_noise` px Gaussian noise with `track_drop` of the observations invisible.
+    +-`depth_field` field and `depth_noise` relative noise; each frame's objects grown or shrunk
+    (half the frames each) by 1..`mask_pixels` px (`_shift_outlines`), `mask_drop` of the frames'
+    masks dropped (all -1, nothing); tracks plus `track_noise` px Gaussian noise with `track_drop`
+    of the observations invisible.
     `info["priors"]` says "corrupted"."""
     for name, value in (("depth_field", depth_field), ("depth_noise", depth_noise), ("mask_pixels", mask_pixels),
                         ("mask_drop", mask_drop), ("track_noise", track_noise), ("track_drop", track_drop)):
@@ -40,7 +54,6 @@ def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10
     depth = depth * (1.0 + depth_noise * rng.standard_normal(depth.shape))
     depth = np.where(clip.depth > 0, depth, 0.0).astype(np.float32)
     masks = clip.masks.copy()
-    k = np.ones((3, 3), np.uint8)
     for i in range(t):
         if rng.random() < mask_drop:
             masks[i] = -1
@@ -48,15 +61,7 @@ def corrupt_priors(clip: GeneratedClip, seed: int = 0, depth_field: float = 0.10
         if mask_pixels <= 0:
             continue                    # no border error asked for
         n = int(rng.integers(1, mask_pixels + 1))
-        grow = rng.random() < 0.5
-        out = np.full((h, w), -1, np.int32)
-        for inst in np.unique(masks[i]):
-            if inst < 0:
-                continue
-            m = (masks[i] == inst).astype(np.uint8)
-            m = (cv2.dilate(m, k, iterations=n) if grow else cv2.erode(m, k, iterations=n)).astype(bool)
-            out[m & ((out < 0) | (masks[i] == inst))] = inst
-        masks[i] = out
+        masks[i] = _shift_outlines(clip.masks[i], n, grow=bool(rng.random() < 0.5))
     tracks = (clip.tracks + track_noise * rng.standard_normal(clip.tracks.shape)).astype(np.float32)
     visible = clip.track_visible & (rng.random(clip.track_visible.shape) >= track_drop)
     info = {**clip.info, "priors": {"depth": "corrupted", "masks": "corrupted", "tracks": "corrupted"}}

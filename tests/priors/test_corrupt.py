@@ -32,3 +32,19 @@ def test_each_kind_of_error_alone(clip):
 def test_a_negative_amount_names_itself(clip, name):
     with pytest.raises(ValueError, match=name):
         corrupt_priors(clip, 0, **{**NONE, name: -1})
+
+
+def test_objects_grow_in_some_frames_and_shrink_in_others():
+    # before, the ground's dilation ate into every object in a "grow" frame: objects only shrank
+    # (the example plate kept 0.79 of its area on average)
+    sim = ms.MorphoSim(generation=ms.GenerationConfig(width=48, height=48, num_frames=12, detail=0.3))
+    clip = sim.generate_clip("The bus is moving from right to left", seed=0)
+    bus = next(i for i, n in clip.labels.items() if n == "bus")
+    out = corrupt_priors(clip, 0, **{**NONE, "mask_pixels": 2})
+    ratio = (out.masks == bus).reshape(12, -1).sum(1) / (clip.masks == bus).reshape(12, -1).sum(1)
+    assert (ratio > 1.05).sum() >= 3 and (ratio < 0.95).sum() >= 3
+    assert np.all(np.abs(ratio - 1.0) > 0.05)          # every frame's outline moved
+    # a grown frame keeps every pixel of the bus, a shrunk one gives it none that it did not have
+    grown, shrunk = int(np.argmax(ratio)), int(np.argmin(ratio))
+    assert (out.masks[grown] == bus)[clip.masks[grown] == bus].all()
+    assert not ((out.masks[shrunk] == bus) & (clip.masks[shrunk] != bus)).any()
