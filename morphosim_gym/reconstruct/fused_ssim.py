@@ -135,10 +135,13 @@ def _backward(x, y, g, moments, scale, grad, tmp, d_mx, d_exx, d_exy, blurred):
         for i in range(h):
             for j in range(w):
                 mx, my, a1, a2, b1, b2 = _terms(moments, c, i, j)
-                s = k * (a1 * a2) / (b1 * b2)
-                d_mx[i, j] = s * (F(2) * my / a1 - F(2) * my / a2 - F(2) * mx / b1 + F(2) * mx / b2)
+                # no division by a1 or a2: a2 = 2 sxy + c2 is 0 where the covariance is -c2 / 2
+                # (it was, once, in a fit: s / a2 gave 0 / 0 and the fit's parameters turned NaN)
+                q = k / (b1 * b2)
+                s = q * a1 * a2
+                d_mx[i, j] = F(2) * my * q * (a2 - a1) + F(2) * mx * s * (F(1) / b2 - F(1) / b1)
                 d_exx[i, j] = -s / b2
-                d_exy[i, j] = F(2) * s / a2
+                d_exy[i, j] = F(2) * q * a1
         _blur(d_mx, grad[c], tmp, g)
         _blur(d_exx, blurred, tmp, g)
         for i in range(h):

@@ -46,7 +46,7 @@ from .video_labels import video_estimators
 
 __all__ = ["ReconstructionConfig", "reconstruct", "validate_clip", "cache_key", "cache_path"]
 
-CACHE_VERSION = 36     # bumped when the method changes, so older results are fitted again
+CACHE_VERSION = 37     # bumped when the method changes, so older results are fitted again
 #: Where the estimated priors stand a room's walls at their distance (`RGBPriorEstimators.walls`),
 #: the fit keeps each Gaussian within this many times its first size (`Strategy.max_footprints`):
 #: a still camera cannot tell a floor-coloured streak along the wall's foot from the table's edge,

@@ -1,10 +1,12 @@
 """The fit's compiled SSIM loss against the torch-convolution formulation: value and gradient."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import torch
 
-from morphosim_gym.reconstruct.fused_ssim import fused_ssim_applies, fused_ssim_loss
+from morphosim_gym.reconstruct.fused_ssim import SSIM_C2, fused_ssim_applies, fused_ssim_loss, window_taps
 from morphosim_gym.reconstruct.losses import conv_ssim_loss, ssim_loss
 
 
@@ -84,3 +86,22 @@ def test_the_window_is_the_standard_ssim_gaussian():
     want = np.exp(-(x ** 2) / (2 * 1.5 ** 2))
     assert np.allclose(window_taps(np.dtype(np.float64)), want / want.sum(), rtol=1e-14)
     assert window_taps(np.dtype(np.float32)).dtype == np.float32
+
+
+def test_a_covariance_of_minus_half_c2_gives_a_finite_gradient():
+    """A 23 px crop of a fit's render and frame (the example ball under corrupted priors) where the
+    kernel's a2 = 2 sxy + c2 is exactly 0 at the centre pixel: the backward pass divided by a2
+    there, 0 / 0 spread NaN over the 11 x 11 window, and the fit's parameters turned NaN."""
+    data = np.load(Path(__file__).parent / "data" / "ssim_zero_covariance.npz")
+    pred, target = torch.from_numpy(data["pred"]), torch.from_numpy(data["target"])
+    a = pred.clone().requires_grad_(True)
+    fused_ssim_loss(a, target).backward()
+    assert torch.isfinite(a.grad).all()
+    ref = pred.double().requires_grad_(True)
+    conv_ssim_loss(ref, target.double()).backward()
+    assert (a.grad.double() - ref.grad).abs().max() < 1e-4 * ref.grad.abs().max()
+    # the crop still holds the case: the centre's covariance term is -c2 / 2 to float32 rounding
+    x, y = data["pred"][6:17, 6:17, 0].astype(np.float64), data["target"][6:17, 6:17, 0].astype(np.float64)
+    w = np.outer(window_taps(np.dtype(np.float64)), window_taps(np.dtype(np.float64)))
+    sxy = (w * x * y).sum() - (w * x).sum() * (w * y).sum()
+    assert abs(2 * sxy + SSIM_C2) < 1e-6
